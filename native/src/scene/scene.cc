@@ -1,0 +1,356 @@
+#include "sunlapse/scene/scene.h"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace sunlapse {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+// Rays per task: large enough to amortise scheduling, small enough to balance.
+constexpr int64_t kGrain = 1024;
+
+void Require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument(message);
+}
+
+std::string EmbreeErrorName(RTCError e) {
+  switch (e) {
+    case RTC_ERROR_NONE: return "none";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown";
+  }
+}
+
+void WriteMiss(int64_t i, const HitBuffers& out) {
+  if (out.point_in_world) {
+    for (int k = 0; k < 3; ++k) out.point_in_world[3 * i + k] = kNaN;
+  }
+  if (out.normal_in_world) {
+    for (int k = 0; k < 3; ++k) out.normal_in_world[3 * i + k] = kNaN;
+  }
+  if (out.distance) out.distance[i] = kInf;
+  if (out.object_id) out.object_id[i] = -1;
+  if (out.triangle_id) out.triangle_id[i] = -1;
+}
+
+}  // namespace
+
+struct Scene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::vector<int32_t> object_ids;
+  int64_t num_vertices = 0;
+  Eigen::AlignedBox3f bounds;
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+
+  void CheckDevice(const char* what) const {
+    const RTCError e = rtcGetDeviceError(device);
+    if (e != RTC_ERROR_NONE) {
+      throw std::runtime_error(std::string("Embree failed in ") + what + ": " +
+                               EmbreeErrorName(e));
+    }
+  }
+
+  // Fills slot i of `out` from a finished ray query.
+  void WriteHit(int64_t i, const RTCRayHit& rh, float dir_norm,
+                const HitBuffers& out) const {
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+      WriteMiss(i, out);
+      return;
+    }
+    const float t = rh.ray.tfar;
+    if (out.point_in_world) {
+      out.point_in_world[3 * i + 0] = rh.ray.org_x + t * rh.ray.dir_x;
+      out.point_in_world[3 * i + 1] = rh.ray.org_y + t * rh.ray.dir_y;
+      out.point_in_world[3 * i + 2] = rh.ray.org_z + t * rh.ray.dir_z;
+    }
+    if (out.normal_in_world) {
+      Eigen::Vector3f n(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+      const Eigen::Vector3f d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+      if (n.dot(d) > 0) n = -n;  // face the ray's origin (the camera)
+      n.normalize();
+      for (int k = 0; k < 3; ++k) out.normal_in_world[3 * i + k] = n[k];
+    }
+    if (out.distance) out.distance[i] = t * dir_norm;
+    if (out.object_id) out.object_id[i] = object_ids[rh.hit.primID];
+    if (out.triangle_id) {
+      out.triangle_id[i] = static_cast<int32_t>(rh.hit.primID);
+    }
+  }
+};
+
+Hits::Hits(int64_t n)
+    : point_in_world(3 * n),
+      normal_in_world(3 * n),
+      distance(n),
+      object_id(n),
+      triangle_id(n) {}
+
+HitBuffers Hits::buffers() {
+  return {point_in_world.data(), normal_in_world.data(), distance.data(),
+          object_id.data(), triangle_id.data()};
+}
+
+Eigen::Vector3f Hits::point(int64_t i) const {
+  return Eigen::Vector3f(&point_in_world[3 * i]);
+}
+
+Eigen::Vector3f Hits::normal(int64_t i) const {
+  return Eigen::Vector3f(&normal_in_world[3 * i]);
+}
+
+Scene::Scene(const float* vertices, int64_t num_vertices,
+             const int32_t* triangles, int64_t num_triangles,
+             const int32_t* object_ids)
+    : impl_(std::make_unique<Impl>()) {
+  Require(num_vertices > 0 && vertices != nullptr,
+          "vertices: the model has no vertices (is the collection empty?)");
+  Require(num_triangles > 0 && triangles != nullptr,
+          "triangles: the model has no triangles (is the collection empty?)");
+  Require(object_ids != nullptr, "object_ids: missing");
+  Require(num_vertices <= std::numeric_limits<int32_t>::max(),
+          "vertices: more than 2^31 vertices");
+  Require(num_triangles <= std::numeric_limits<int32_t>::max(),
+          "triangles: more than 2^31 triangles");
+
+  Eigen::AlignedBox3f bounds;
+  for (int64_t v = 0; v < num_vertices; ++v) {
+    const Eigen::Vector3f p(vertices + 3 * v);
+    Require(p.allFinite(), "vertices: vertex " + std::to_string(v) +
+                               " is not finite");
+    bounds.extend(p);
+  }
+  for (int64_t t = 0; t < num_triangles; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int32_t idx = triangles[3 * t + k];
+      Require(idx >= 0 && idx < num_vertices,
+              "triangles: index " + std::to_string(idx) + " of triangle " +
+                  std::to_string(t) + " is out of range [0, " +
+                  std::to_string(num_vertices) + ")");
+    }
+    Require(object_ids[t] >= 0, "object_ids: id of triangle " +
+                                    std::to_string(t) + " is negative");
+  }
+
+  Impl& s = *impl_;
+  s.device = rtcNewDevice(nullptr);
+  if (!s.device) {
+    throw std::runtime_error("Embree: cannot create a device: " +
+                             EmbreeErrorName(rtcGetDeviceError(nullptr)));
+  }
+  s.scene = rtcNewScene(s.device);
+  rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_MEDIUM);
+  RTCGeometry geom = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  // Embree may read 16 bytes past a vertex buffer's last element; buffers it
+  // allocates itself are padded, so copy into those.
+  auto* vbuf = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+      num_vertices));
+  auto* ibuf = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+      num_triangles));
+  if (!vbuf || !ibuf) {
+    rtcReleaseGeometry(geom);
+    s.CheckDevice("buffer allocation");
+    throw std::runtime_error("Embree: buffer allocation failed");
+  }
+  std::memcpy(vbuf, vertices, sizeof(float) * 3 * num_vertices);
+  std::memcpy(ibuf, triangles, sizeof(uint32_t) * 3 * num_triangles);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(s.scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(s.scene);
+  s.CheckDevice("the BVH build");
+  s.object_ids.assign(object_ids, object_ids + num_triangles);
+  s.num_vertices = num_vertices;
+  s.bounds = bounds;
+}
+
+namespace {
+template <typename V>
+std::vector<float> Flatten3(const std::vector<V>& v) {
+  std::vector<float> out(3 * v.size());
+  for (size_t i = 0; i < v.size(); ++i) {
+    for (int k = 0; k < 3; ++k) out[3 * i + k] = static_cast<float>(v[i][k]);
+  }
+  return out;
+}
+template <typename V>
+std::vector<int32_t> Flatten3i(const std::vector<V>& v) {
+  std::vector<int32_t> out(3 * v.size());
+  for (size_t i = 0; i < v.size(); ++i) {
+    for (int k = 0; k < 3; ++k) out[3 * i + k] = v[i][k];
+  }
+  return out;
+}
+}  // namespace
+
+Scene::Scene(const std::vector<Eigen::Vector3f>& vertices,
+             const std::vector<Eigen::Vector3i>& triangles,
+             const std::vector<int32_t>& object_ids)
+    : Scene(Flatten3(vertices).data(), static_cast<int64_t>(vertices.size()),
+            Flatten3i(triangles).data(),
+            static_cast<int64_t>(triangles.size()),
+            (Require(object_ids.size() == triangles.size(),
+                     "object_ids: need one per triangle"),
+             object_ids.data())) {}
+
+Scene::~Scene() = default;
+Scene::Scene(Scene&&) noexcept = default;
+Scene& Scene::operator=(Scene&&) noexcept = default;
+
+int64_t Scene::num_triangles() const {
+  return static_cast<int64_t>(impl_->object_ids.size());
+}
+int64_t Scene::num_vertices() const { return impl_->num_vertices; }
+Eigen::AlignedBox3f Scene::bounds() const { return impl_->bounds; }
+int32_t Scene::object_id_of_triangle(int64_t t) const {
+  return impl_->object_ids.at(t);
+}
+
+void Scene::Intersect(int64_t n, const float* origins, const float* directions,
+                      float t_near, float t_far, HitBuffers out) const {
+  Require(n >= 0, "n must be >= 0");
+  Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
+  const Impl& s = *impl_;
+  tbb::parallel_for(
+      tbb::blocked_range<int64_t>(0, n, kGrain),
+      [&](const tbb::blocked_range<int64_t>& r) {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        for (int64_t i = r.begin(); i < r.end(); ++i) {
+          const float* o = origins + 3 * i;
+          const float* d = directions + 3 * i;
+          const float norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+          if (!(norm > 0) || !std::isfinite(norm)) {
+            WriteMiss(i, out);
+            continue;
+          }
+          RTCRayHit rh;
+          rh.ray.org_x = o[0];
+          rh.ray.org_y = o[1];
+          rh.ray.org_z = o[2];
+          rh.ray.dir_x = d[0] / norm;
+          rh.ray.dir_y = d[1] / norm;
+          rh.ray.dir_z = d[2] / norm;
+          rh.ray.tnear = t_near;
+          rh.ray.tfar = t_far;
+          rh.ray.time = 0.f;
+          rh.ray.mask = 0xFFFFFFFFu;
+          rh.ray.id = 0;
+          rh.ray.flags = 0;
+          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          rtcIntersect1(s.scene, &ctx, &rh);
+          s.WriteHit(i, rh, 1.f, out);
+        }
+      });
+}
+
+void Scene::IntersectPixels(const Camera& camera, int64_t n,
+                            const double* pixels, HitBuffers out) const {
+  Require(n >= 0, "n must be >= 0");
+  const Impl& s = *impl_;
+  const Eigen::Vector3f center = camera.center_in_world().cast<float>();
+  tbb::parallel_for(
+      tbb::blocked_range<int64_t>(0, n, kGrain),
+      [&](const tbb::blocked_range<int64_t>& r) {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        for (int64_t i = r.begin(); i < r.end(); ++i) {
+          const Eigen::Vector2d px(pixels[2 * i], pixels[2 * i + 1]);
+          if (!px.allFinite()) {
+            WriteMiss(i, out);
+            continue;
+          }
+          const Eigen::Vector3f d = camera.PixelToRayInWorld(px).cast<float>();
+          RTCRayHit rh;
+          rh.ray.org_x = center.x();
+          rh.ray.org_y = center.y();
+          rh.ray.org_z = center.z();
+          rh.ray.dir_x = d.x();
+          rh.ray.dir_y = d.y();
+          rh.ray.dir_z = d.z();
+          rh.ray.tnear = 0.f;
+          rh.ray.tfar = kInf;
+          rh.ray.time = 0.f;
+          rh.ray.mask = 0xFFFFFFFFu;
+          rh.ray.id = 0;
+          rh.ray.flags = 0;
+          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          rtcIntersect1(s.scene, &ctx, &rh);
+          s.WriteHit(i, rh, 1.f, out);
+        }
+      });
+}
+
+Hits Scene::IntersectPixels(const Camera& camera,
+                            const std::vector<Eigen::Vector2d>& pixels) const {
+  Hits hits(static_cast<int64_t>(pixels.size()));
+  std::vector<double> flat(2 * pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    flat[2 * i] = pixels[i].x();
+    flat[2 * i + 1] = pixels[i].y();
+  }
+  IntersectPixels(camera, static_cast<int64_t>(pixels.size()), flat.data(),
+                  hits.buffers());
+  return hits;
+}
+
+void Scene::Occluded(int64_t n, const float* origins, const float* directions,
+                     float t_near, float t_far, uint8_t* occluded) const {
+  Require(n >= 0, "n must be >= 0");
+  Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
+  const Impl& s = *impl_;
+  tbb::parallel_for(
+      tbb::blocked_range<int64_t>(0, n, kGrain),
+      [&](const tbb::blocked_range<int64_t>& r) {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        for (int64_t i = r.begin(); i < r.end(); ++i) {
+          const float* o = origins + 3 * i;
+          const float* d = directions + 3 * i;
+          const float norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+          if (!(norm > 0) || !std::isfinite(norm)) {
+            occluded[i] = 0;
+            continue;
+          }
+          RTCRay ray;
+          ray.org_x = o[0];
+          ray.org_y = o[1];
+          ray.org_z = o[2];
+          ray.dir_x = d[0] / norm;
+          ray.dir_y = d[1] / norm;
+          ray.dir_z = d[2] / norm;
+          ray.tnear = t_near;
+          ray.tfar = t_far;
+          ray.time = 0.f;
+          ray.mask = 0xFFFFFFFFu;
+          ray.id = 0;
+          ray.flags = 0;
+          rtcOccluded1(s.scene, &ctx, &ray);
+          occluded[i] = ray.tfar < 0 ? 1 : 0;  // Embree sets -inf on a hit
+        }
+      });
+}
+
+}  // namespace sunlapse

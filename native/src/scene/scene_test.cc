@@ -1,0 +1,125 @@
+#include "sunlapse/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace sunlapse {
+namespace {
+
+// Ground plane z = 0 over [-10, 10]^2 (object 0) and a 2 x 2 x 2 box standing
+// on it at the origin (object 1).
+Scene BoxOnPlane() {
+  std::vector<Eigen::Vector3f> v = {{-10, -10, 0}, {10, -10, 0}, {10, 10, 0},
+                                    {-10, 10, 0}};
+  std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
+  std::vector<int32_t> ids = {0, 0};
+  const int b = static_cast<int>(v.size());
+  for (int i = 0; i < 8; ++i) {
+    v.emplace_back((i & 1) ? 1.f : -1.f, (i & 2) ? 1.f : -1.f,
+                   (i & 4) ? 2.f : 0.f);
+  }
+  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    t.emplace_back(b + q[0], b + q[1], b + q[2]);
+    t.emplace_back(b + q[0], b + q[2], b + q[3]);
+    ids.push_back(1);
+    ids.push_back(1);
+  }
+  return Scene(v, t, ids);
+}
+
+TEST(Scene, ReportsCountsAndBounds) {
+  const Scene scene = BoxOnPlane();
+  EXPECT_EQ(scene.num_triangles(), 14);
+  EXPECT_EQ(scene.num_vertices(), 12);
+  EXPECT_FLOAT_EQ(scene.bounds().min().x(), -10);
+  EXPECT_FLOAT_EQ(scene.bounds().max().z(), 2);
+}
+
+TEST(Scene, FirstHitsGivePointNormalAndObject) {
+  const Scene scene = BoxOnPlane();
+  // Down onto the box top, down onto the ground, up from below the ground,
+  // and one ray that misses everything.
+  const float origins[] = {0.5f, 0.2f, 10, 5, 5, 10, 5, 5, -3, 0, 0, 10};
+  const float dirs[] = {0, 0, -2, 0, 0, -1, 0, 0, 1, 0, 0, 1};
+  Hits hits(4);
+  scene.Intersect(4, origins, dirs, 0.f, INFINITY, hits.buffers());
+  ASSERT_TRUE(hits.hit(0));
+  EXPECT_EQ(hits.object_id[0], 1);
+  EXPECT_NEAR((hits.point(0) - Eigen::Vector3f(0.5f, 0.2f, 2)).norm(), 0, 1e-5);
+  EXPECT_NEAR((hits.normal(0) - Eigen::Vector3f::UnitZ()).norm(), 0, 1e-6);
+  EXPECT_NEAR(hits.distance[0], 8.0, 1e-5);  // along the unit direction
+  EXPECT_EQ(hits.object_id[1], 0);
+  EXPECT_NEAR(hits.point(1).z(), 0, 1e-6);
+  EXPECT_NEAR((hits.normal(2) + Eigen::Vector3f::UnitZ()).norm(), 0, 1e-6)
+      << "normal must face the ray origin";
+  EXPECT_FALSE(hits.hit(3));
+  EXPECT_EQ(hits.triangle_id[3], -1);
+  EXPECT_TRUE(std::isinf(hits.distance[3]));
+}
+
+TEST(Scene, CameraPixelsHitWhatTheyProjectFrom) {
+  const Scene scene = BoxOnPlane();
+  BlenderCameraParams p;
+  p.width = 320;
+  p.height = 240;
+  // Camera 12 m south, 8 m up, looking at the origin.
+  const Eigen::Vector3d eye(0, -12, 8);
+  const Eigen::Vector3d back = eye.normalized();
+  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
+  p.world_from_camera_local.block<3, 1>(0, 0) = right;
+  p.world_from_camera_local.block<3, 1>(0, 1) = back.cross(right);
+  p.world_from_camera_local.block<3, 1>(0, 2) = back;
+  p.world_from_camera_local.block<3, 1>(0, 3) = eye;
+  const Camera cam = Camera::FromBlender(p);
+  const Eigen::Vector3d top(0.3, -0.4, 2.0), ground(4, 3, 0);
+  Eigen::Vector2d px_top, px_ground;
+  ASSERT_TRUE(cam.WorldToPixel(top, &px_top));
+  ASSERT_TRUE(cam.WorldToPixel(ground, &px_ground));
+  const Hits hits = scene.IntersectPixels(cam, {px_top, px_ground});
+  EXPECT_EQ(hits.object_id[0], 1);
+  EXPECT_NEAR((hits.point(0).cast<double>() - top).norm(), 0, 1e-4);
+  EXPECT_EQ(hits.object_id[1], 0);
+  EXPECT_NEAR((hits.point(1).cast<double>() - ground).norm(), 0, 1e-4);
+}
+
+TEST(Scene, OcclusionTowardTheSunSeesTheBoxShadow) {
+  const Scene scene = BoxOnPlane();
+  // Ground points east and west of the box, Sun low in the west (from -X).
+  const Eigen::Vector3f to_sun = Eigen::Vector3f(-1, 0, 0.5).normalized();
+  const float origins[] = {3, 0, 0, -3, 0, 0, 3, 5, 0};
+  float dirs[9];
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) dirs[3 * i + k] = to_sun[k];
+  }
+  uint8_t occluded[3];
+  scene.Occluded(3, origins, dirs, 1e-3f, INFINITY, occluded);
+  EXPECT_EQ(occluded[0], 1);  // east of the box: in its shadow
+  EXPECT_EQ(occluded[1], 0);  // west of the box: lit
+  EXPECT_EQ(occluded[2], 0);  // beside the shadow: lit
+  // A short ray stops before the box.
+  scene.Occluded(1, origins, dirs, 1e-3f, 0.5f, occluded);
+  EXPECT_EQ(occluded[0], 0);
+}
+
+TEST(Scene, RejectsBadMeshes) {
+  const std::vector<Eigen::Vector3f> v = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  EXPECT_THROW(Scene(v, {}, {}), std::invalid_argument);
+  EXPECT_THROW(Scene(v, {{0, 1, 3}}, {0}), std::invalid_argument);
+  EXPECT_THROW(Scene(v, {{0, 1, -1}}, {0}), std::invalid_argument);
+  EXPECT_THROW(Scene(v, {{0, 1, 2}}, {-2}), std::invalid_argument);
+  EXPECT_THROW(Scene(v, {{0, 1, 2}}, {0, 0}), std::invalid_argument);
+  EXPECT_THROW(Scene({{0, 0, NAN}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}, {0}),
+               std::invalid_argument);
+  try {
+    Scene(v, {{0, 1, 7}}, {0});
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("triangles"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace sunlapse
