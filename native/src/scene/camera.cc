@@ -1,5 +1,7 @@
 #include "sunlapse/scene/camera.h"
 
+#include <Eigen/SVD>
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -117,6 +119,11 @@ Camera Camera::FromBlender(const BlenderCameraParams& p) {
                   .maxCoeff() < 1e-5,
           "world_from_camera_local has shear (non-uniform scale on a rotated "
           "parent); apply the scale to the camera");
+  // Blender stores matrices in float32: snap to the nearest rotation so that
+  // projection and back-projection are exact inverses.
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(axes,
+                                        Eigen::ComputeFullU | Eigen::ComputeFullV);
+  axes = svd.matrixU() * svd.matrixV().transpose();
   // Blender camera local (+Y up, looking along -Z) -> OpenCV camera.
   Eigen::Matrix3d world_from_cam_rot;
   world_from_cam_rot << axes.col(0), -axes.col(1), -axes.col(2);

@@ -34,6 +34,14 @@ std::string EmbreeErrorName(RTCError e) {
   }
 }
 
+// Embree asserts on rays with non-finite origins or directions (Debian builds
+// it with assertions on), so such rays are answered here as misses.
+bool ValidRay(const float* o, const float* d, float* norm) {
+  *norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  return *norm > 0 && std::isfinite(*norm) && std::isfinite(o[0]) &&
+         std::isfinite(o[1]) && std::isfinite(o[2]);
+}
+
 void WriteMiss(int64_t i, const HitBuffers& out) {
   if (out.point_in_world) {
     for (int k = 0; k < 3; ++k) out.point_in_world[3 * i + k] = kNaN;
@@ -238,8 +246,8 @@ void Scene::Intersect(int64_t n, const float* origins, const float* directions,
         for (int64_t i = r.begin(); i < r.end(); ++i) {
           const float* o = origins + 3 * i;
           const float* d = directions + 3 * i;
-          const float norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-          if (!(norm > 0) || !std::isfinite(norm)) {
+          float norm;
+          if (!ValidRay(o, d, &norm)) {
             WriteMiss(i, out);
             continue;
           }
@@ -329,8 +337,8 @@ void Scene::Occluded(int64_t n, const float* origins, const float* directions,
         for (int64_t i = r.begin(); i < r.end(); ++i) {
           const float* o = origins + 3 * i;
           const float* d = directions + 3 * i;
-          const float norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-          if (!(norm > 0) || !std::isfinite(norm)) {
+          float norm;
+          if (!ValidRay(o, d, &norm)) {
             occluded[i] = 0;
             continue;
           }

@@ -105,6 +105,19 @@ TEST(Scene, OcclusionTowardTheSunSeesTheBoxShadow) {
   EXPECT_EQ(occluded[0], 0);
 }
 
+TEST(Scene, NonFiniteRaysAreMissesNotCrashes) {
+  const Scene scene = BoxOnPlane();
+  const float nan = NAN;
+  const float origins[] = {nan, 0, 10, 0, 0, 10, 0, 0, 10};
+  const float dirs[] = {0, 0, -1, 0, 0, 0, 0, nan, -1};
+  Hits hits(3);
+  scene.Intersect(3, origins, dirs, 0.f, INFINITY, hits.buffers());
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(hits.hit(i));
+  uint8_t occluded[3] = {9, 9, 9};
+  scene.Occluded(3, origins, dirs, 0.f, INFINITY, occluded);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(occluded[i], 0);
+}
+
 TEST(Scene, RejectsBadMeshes) {
   const std::vector<Eigen::Vector3f> v = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   EXPECT_THROW(Scene(v, {}, {}), std::invalid_argument);

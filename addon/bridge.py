@@ -1,0 +1,290 @@
+"""Gathers what the native core needs from the current Blender scene.
+
+Everything here reads bpy; nothing writes it. Arrays are filled with
+``foreach_get`` (no per-vertex Python loops) in the conventions of DESIGN.md
+§2: world frame = Blender's, OpenCV pixels, degrees at every boundary.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import List, Optional, Sequence
+
+import bpy
+import numpy as np
+
+from . import native_loader
+
+
+class SceneError(Exception):
+    """Something the user must fix in the scene; the message says what."""
+
+
+@dataclass
+class Model:
+    vertices: np.ndarray        # (V, 3) float32, world frame
+    triangles: np.ndarray       # (T, 3) int32
+    object_ids: np.ndarray      # (T,) int32, index into names
+    names: List[str]            # object name per id
+
+    @property
+    def num_triangles(self) -> int:
+        return int(self.triangles.shape[0])
+
+    def bounds(self):
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+    def ids_of(self, names: Sequence[str]) -> List[int]:
+        return [i for i, n in enumerate(self.names) if n in set(names)]
+
+
+@dataclass
+class CameraInfo:
+    name: str
+    params: dict                 # keyword arguments of _native.Camera.from_blender
+    distortion: Optional[dict] = None   # keyword arguments of set_distortion
+    warnings: List[str] = field(default_factory=list)
+
+
+@dataclass
+class ClipInfo:
+    name: str
+    filepath: str                # absolute
+    source: str                  # 'MOVIE' or 'SEQUENCE'
+    frame_start: int             # scene frame of the clip's first frame
+    frame_duration: int
+    width: int
+    height: int
+    fps: float
+
+    @property
+    def frame_end(self) -> int:
+        return self.frame_start + self.frame_duration - 1
+
+
+# --------------------------------------------------------------------------
+# Model
+
+def _mesh_arrays(obj_eval, matrix_world):
+    """World-space vertices and loop triangles of one evaluated object."""
+    mesh = obj_eval.to_mesh()
+    try:
+        mesh.calc_loop_triangles()
+        nv, nt = len(mesh.vertices), len(mesh.loop_triangles)
+        if nv == 0 or nt == 0:
+            return None
+        co = np.empty(nv * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("co", co)
+        tri = np.empty(nt * 3, dtype=np.int32)
+        mesh.loop_triangles.foreach_get("vertices", tri)
+    finally:
+        obj_eval.to_mesh_clear()
+    m = np.array(matrix_world, dtype=np.float64)
+    world = co.reshape(-1, 3).astype(np.float64) @ m[:3, :3].T + m[:3, 3]
+    return world.astype(np.float32), tri.reshape(-1, 3)
+
+
+def gather_model(context, collection: Optional[bpy.types.Collection] = None,
+                 exclude: Sequence[str] = ()) -> Model:
+    """Triangles of the evaluated meshes of `collection` (and its children),
+    or of every visible mesh in the view layer when `collection` is None.
+
+    Modifiers, geometry nodes and collection instances are honoured (the
+    depsgraph's object instances). Raises SceneError when nothing is found.
+    """
+    depsgraph = context.evaluated_depsgraph_get()
+    view_layer = context.view_layer
+    members = None
+    if collection is not None:
+        members = {o.name for o in collection.all_objects}
+    exclude = set(exclude)
+
+    verts, tris, ids, names = [], [], [], []
+    offset = 0
+    for inst in depsgraph.object_instances:
+        obj = inst.object
+        if obj.type != "MESH":
+            continue
+        original = obj.original
+        parent = inst.parent.original if inst.is_instance and inst.parent else None
+        owner = parent if parent is not None else original
+        if owner.name in exclude or original.name in exclude:
+            continue
+        if members is not None:
+            if owner.name not in members and original.name not in members:
+                continue
+        elif not owner.visible_get(view_layer=view_layer):
+            continue
+        arrays = _mesh_arrays(obj, inst.matrix_world)
+        if arrays is None:
+            continue
+        world, tri = arrays
+        name = original.name if parent is None else f"{parent.name}/{original.name}"
+        ids.append(np.full(len(tri), len(names), dtype=np.int32))
+        names.append(name)
+        verts.append(world)
+        tris.append(tri + offset)
+        offset += len(world)
+
+    where = f"collection '{collection.name}'" if collection else "the visible scene"
+    if not tris:
+        raise SceneError(f"The model is empty: no mesh with faces in {where}. "
+                         "Model the scene (ground and main objects) as meshes.")
+    return Model(vertices=np.ascontiguousarray(np.concatenate(verts)),
+                 triangles=np.ascontiguousarray(np.concatenate(tris)),
+                 object_ids=np.ascontiguousarray(np.concatenate(ids)),
+                 names=names)
+
+
+def guess_ground(model: Model) -> List[str]:
+    """Objects whose triangles face mostly up and that hold the lowest, widest
+    up-facing area: the ground the shadows fall on (overridable by the user)."""
+    v = model.vertices.astype(np.float64)
+    t = model.triangles
+    cross = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    nz = np.abs(cross[:, 2]) / np.maximum(2 * area, 1e-12)
+    up_area = np.bincount(model.object_ids, weights=area * (nz > 0.95),
+                          minlength=len(model.names))
+    total = np.bincount(model.object_ids, weights=area, minlength=len(model.names))
+    if up_area.max() <= 0:
+        return []
+    best = int(np.argmax(up_area))
+    # Also keep other mostly-flat objects at least half as large (tiles, lawns).
+    keep = [i for i in range(len(model.names))
+            if up_area[i] >= 0.5 * up_area[best] and up_area[i] >= 0.8 * total[i]]
+    return [model.names[i] for i in keep]
+
+
+# --------------------------------------------------------------------------
+# Camera
+
+def _render_size(scene):
+    r = scene.render
+    pct = r.resolution_percentage / 100.0
+    return max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
+
+
+def gather_camera(context, camera_obj=None, clip: Optional[ClipInfo] = None,
+                  movieclip=None) -> CameraInfo:
+    """Blender's camera as native parameters, sized to the clip's frames.
+
+    The image size is the clip's when a clip is given (the estimator works on
+    its frames); the render resolution must then have the same aspect, since
+    Blender's view frame follows the render settings.
+    """
+    scene = context.scene
+    obj = camera_obj or scene.camera
+    if obj is None:
+        raise SceneError("The scene has no camera: add one matched to the "
+                         "footage (Scene Properties › Camera).")
+    if obj.type != "CAMERA":
+        raise SceneError(f"'{obj.name}' is not a camera object.")
+    cam = obj.data
+    if cam.type != "PERSP":
+        raise SceneError(f"Camera '{obj.name}' is {cam.type}; only perspective "
+                         "cameras are supported.")
+    warnings = []
+    rw, rh = _render_size(scene)
+    width, height = rw, rh
+    if clip is not None:
+        render_aspect = rw * scene.render.pixel_aspect_x / (rh * scene.render.pixel_aspect_y)
+        clip_aspect = clip.width * scene.render.pixel_aspect_x / (clip.height * scene.render.pixel_aspect_y)
+        if abs(render_aspect / clip_aspect - 1.0) > 0.01:
+            raise SceneError(
+                f"Render resolution {rw}x{rh} does not have the clip's aspect "
+                f"({clip.width}x{clip.height}): set Output Properties › "
+                "Resolution to the clip's size, as the camera was matched to it.")
+        width, height = clip.width, clip.height
+    depsgraph = context.evaluated_depsgraph_get()
+    matrix = np.array(obj.evaluated_get(depsgraph).matrix_world, dtype=np.float64)
+    params = dict(
+        lens_mm=float(cam.lens), sensor_width_mm=float(cam.sensor_width),
+        sensor_height_mm=float(cam.sensor_height), sensor_fit=cam.sensor_fit,
+        shift_x=float(cam.shift_x), shift_y=float(cam.shift_y),
+        width=int(width), height=int(height),
+        pixel_aspect_x=float(scene.render.pixel_aspect_x),
+        pixel_aspect_y=float(scene.render.pixel_aspect_y),
+        matrix_world=matrix)
+    distortion = None
+    if movieclip is not None:
+        distortion = _clip_distortion(movieclip, warnings)
+    return CameraInfo(name=obj.name, params=params, distortion=distortion,
+                      warnings=warnings)
+
+
+def _clip_distortion(movieclip, warnings) -> Optional[dict]:
+    """The clip's tracking-camera lens distortion, when the user set one."""
+    tc = movieclip.tracking.camera
+    model = getattr(tc, "distortion_model", "POLYNOMIAL")
+    if model != "POLYNOMIAL":
+        warnings.append(f"Lens distortion model {model} is not supported yet; "
+                        "frames are used as recorded.")
+        return None
+    k = (float(tc.k1), float(tc.k2), float(tc.k3))
+    if not any(k):
+        return None
+    w, h = movieclip.size
+    # Blender 3.x: principal (pixels from the bottom-left corner);
+    # 3.5+: principal_point_pixels. Convert to OpenCV pixel centres.
+    if hasattr(tc, "principal_point_pixels"):
+        px, py = tc.principal_point_pixels
+    else:
+        px, py = tc.principal
+    focal = float(tc.focal_length_pixels)
+    aspect = float(getattr(tc, "pixel_aspect", 1.0)) or 1.0
+    return dict(focal_x_px=focal, focal_y_px=focal * aspect,
+                principal_x_px=float(px) - 0.5,
+                principal_y_px=float(h) - float(py) - 0.5,
+                k1=k[0], k2=k[1], k3=k[2])
+
+
+def build_camera(info: CameraInfo):
+    native = native_loader.require()
+    cam = native.Camera.from_blender(**info.params)
+    if info.distortion:
+        cam.set_distortion(**info.distortion)
+    return cam
+
+
+# --------------------------------------------------------------------------
+# Clip
+
+def active_movieclip(context):
+    """The clip being edited, else the scene's active clip, else the only one."""
+    space = getattr(context, "space_data", None)
+    clip = getattr(space, "clip", None) if space is not None else None
+    if clip is None:
+        clip = context.scene.active_clip
+    if clip is None and len(bpy.data.movieclips) == 1:
+        clip = bpy.data.movieclips[0]
+    return clip
+
+
+def gather_clip(context, movieclip=None) -> ClipInfo:
+    clip = movieclip or active_movieclip(context)
+    if clip is None:
+        raise SceneError("No clip: open the footage in the Movie Clip Editor "
+                         "(or set Scene Properties › Active Clip).")
+    path = bpy.path.abspath(clip.filepath, library=clip.library)
+    path = os.path.normpath(path)
+    if not os.path.exists(path):
+        raise SceneError(f"Clip '{clip.name}' not found on disk: {path}")
+    w, h = clip.size
+    if w <= 0 or h <= 0:
+        raise SceneError(f"Clip '{clip.name}' cannot be read (size {w}x{h}): "
+                         "the file may be corrupt or of an unsupported format.")
+    return ClipInfo(name=clip.name, filepath=path, source=clip.source,
+                    frame_start=int(clip.frame_start),
+                    frame_duration=int(clip.frame_duration),
+                    width=int(w), height=int(h), fps=float(clip.fps or 0.0))
+
+
+# --------------------------------------------------------------------------
+# Native scene
+
+def build_scene(model: Model):
+    """The Embree scene of the model (the BVH build releases the GIL)."""
+    native = native_loader.require()
+    return native.Scene(model.vertices, model.triangles, model.object_ids)

@@ -1,0 +1,1 @@
+"""bpy-free parts of sunlapse: usable and testable without Blender."""

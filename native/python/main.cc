@@ -1,0 +1,14 @@
+// The _native module: thin bindings of the native stages (DESIGN.md §1).
+#include <pybind11/pybind11.h>
+
+namespace py = pybind11;
+
+namespace sunlapse::python {
+void BindScene(py::module_& m);
+}  // namespace sunlapse::python
+
+PYBIND11_MODULE(_native, m) {
+  m.doc() = "sunlapse native core: camera, scene ray casting, estimators";
+  m.attr("__version__") = "0.1.0";
+  sunlapse::python::BindScene(m);
+}

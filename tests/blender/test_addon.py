@@ -1,0 +1,115 @@
+"""Registration, the panel and the Check Scene operator; the scripted entry."""
+import json
+import os
+import subprocess
+import sys
+
+import bpy
+import pytest
+
+import scenes
+from conftest import ROOT, sunlapse
+
+
+def test_register_and_unregister_leave_nothing_behind(empty_scene):
+    assert hasattr(bpy.types.Scene, "sunlapse")
+    assert hasattr(bpy.types, "CLIP_PT_sunlapse")
+    assert "sunlapse_check_scene" in dir(bpy.ops.clip)
+    sunlapse.unregister()
+    try:
+        assert not hasattr(bpy.types.Scene, "sunlapse")
+        assert not hasattr(bpy.types, "CLIP_PT_sunlapse")
+        assert not hasattr(bpy.types, "VIEW3D_PT_sunlapse")
+        assert not hasattr(bpy.types, "SunlapseSettings")
+        assert "sunlapse_check_scene" not in dir(bpy.ops.clip)
+    finally:
+        sunlapse.register()
+
+
+def test_check_scene_operator_reports_a_valid_scene(empty_scene, tmp_path):
+    scene = empty_scene
+    scene.render.resolution_x, scene.render.resolution_y = 64, 48
+    scenes.add_box_on_plane(scene)
+    scenes.add_camera(scene, (0, -12, 6), (0, 0, 0))
+    scenes.load_clip(scene, scenes.write_frames(str(tmp_path / "f")))
+    assert bpy.ops.clip.sunlapse_check_scene() == {"FINISHED"}
+    assert "26 triangles in 3 objects" in scene.sunlapse.last_report
+    assert "ground: Ground" in scene.sunlapse.last_report
+
+
+def test_check_scene_operator_cancels_without_camera(empty_scene, tmp_path):
+    scenes.add_box_on_plane(empty_scene)
+    scenes.load_clip(empty_scene, scenes.write_frames(str(tmp_path / "f")))
+    with pytest.raises(RuntimeError, match="no camera"):
+        # In background mode a reported ERROR surfaces as RuntimeError.
+        bpy.ops.clip.sunlapse_check_scene()
+
+
+# ---------------------------------------------------------------------------
+# examples/run_estimate.py, run as a user would, in a separate Blender.
+
+def make_blend(tmp_path, camera=True, model=True, clip=True):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = 64, 48
+    if model:
+        scenes.add_box_on_plane(scene)
+    if camera:
+        scenes.add_camera(scene, (0, -12, 6), (0, 0, 0))
+    if clip:
+        scenes.load_clip(scene, scenes.write_frames(str(tmp_path / "frames")))
+    path = str(tmp_path / "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    return path
+
+
+def run_estimate(blend, out, *extra):
+    cmd = [bpy.app.binary_path, "-b", "--factory-startup", blend, "--python-exit-code", "1",
+           "--python", os.path.join(ROOT, "examples", "run_estimate.py"), "--", "--out", out,
+           *extra]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+
+
+def error_lines(proc):
+    return [l for l in proc.stderr.splitlines() if l.startswith("sunlapse: error:")]
+
+
+def test_scripted_run_writes_a_track_for_a_valid_scene(empty_scene, tmp_path):
+    blend = make_blend(tmp_path)
+    out = str(tmp_path / "out.sun.json")
+    proc = run_estimate(blend, out)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    track = json.load(open(out))
+    assert track["format"] == "sunlapse.track" and track["version"] == 1
+    assert track["frames"] == []
+    assert "no estimator" in track["message"]
+    assert track["clip"].endswith("frame_0001.png")
+
+
+@pytest.mark.parametrize("missing,reason", [
+    ("camera", "no camera"), ("model", "model is empty"), ("clip", "No clip")])
+def test_scripted_run_fails_with_one_line_reason(empty_scene, tmp_path, missing, reason):
+    blend = make_blend(tmp_path, **{missing: False})
+    out = str(tmp_path / "out.sun.json")
+    proc = run_estimate(blend, out)
+    assert proc.returncode not in (0, None)
+    lines = error_lines(proc)
+    assert len(lines) == 1 and reason in lines[0], proc.stderr
+    assert not os.path.exists(out)
+
+
+def test_scripted_run_reports_a_clip_missing_on_disk(empty_scene, tmp_path):
+    blend = make_blend(tmp_path)
+    for f in os.listdir(tmp_path / "frames"):
+        os.unlink(tmp_path / "frames" / f)
+    proc = run_estimate(blend, str(tmp_path / "o.json"))
+    assert proc.returncode != 0
+    assert "not found on disk" in error_lines(proc)[0]
+
+
+def test_scripted_run_rejects_bad_flags(empty_scene, tmp_path):
+    blend = make_blend(tmp_path)
+    proc = run_estimate(blend, str(tmp_path / "o.json"), "--frames", "9:1")
+    assert proc.returncode != 0 and "--frames" in error_lines(proc)[0]
+    proc = run_estimate(blend, str(tmp_path / "o.json"), "--collection", "Nope")
+    assert proc.returncode != 0 and "Nope" in error_lines(proc)[0]

@@ -1,0 +1,91 @@
+import json
+import math
+
+import pytest
+
+from core import trackfile as tf
+
+
+def sample_track():
+    return tf.Track(
+        clip="footage.mp4", frame_start=5, north_offset_deg=12.5,
+        method={"initial": "default", "smoothing": "two_pass", "options": {}},
+        initial={"zenith_deg": 40.0, "azimuth_deg": 170.0, "residual": 0.01},
+        frames=[
+            tf.FrameEstimate(frame=5, zenith_deg=40.0, azimuth_deg=170.0,
+                             raw_zenith_deg=40.2, raw_azimuth_deg=169.0, confidence=0.9,
+                             shadow_start_px=[10, 20], shadow_end_px=[30, 40]),
+            tf.FrameEstimate(frame=6, reason="frame is black"),
+        ],
+        extra={"future_key": {"a": 1}})
+
+
+def test_round_trip_keeps_everything(tmp_path):
+    path = tmp_path / "t.sun.json"
+    tf.write_track(str(path), sample_track())
+    back = tf.read_track(str(path))
+    assert back.frame_start == 5 and back.north_offset_deg == 12.5
+    assert back.frames[0].raw_azimuth_deg == 169.0
+    assert back.frames[0].shadow_end_px == [30, 40]
+    assert back.frames[1].zenith_deg is None and back.frames[1].reason == "frame is black"
+    assert back.extra == {"future_key": {"a": 1}}
+    assert back.initial["azimuth_deg"] == 170.0
+
+
+def test_written_json_has_the_design_shape(tmp_path):
+    path = tmp_path / "t.sun.json"
+    tf.write_track(str(path), sample_track())
+    d = json.loads(path.read_text())
+    assert d["format"] == "sunlapse.track" and d["version"] == 1
+    f0, f1 = d["frames"]
+    assert set(f0) >= {"frame", "zenith_deg", "azimuth_deg", "raw_zenith_deg",
+                       "raw_azimuth_deg", "confidence", "shadow"}
+    assert "reason" not in f0
+    assert f1["zenith_deg"] is None and f1["reason"] == "frame is black"
+
+
+def test_non_finite_angles_become_null(tmp_path):
+    t = sample_track()
+    t.frames[0].zenith_deg = math.nan
+    path = tmp_path / "t.json"
+    tf.write_track(str(path), t)
+    d = json.loads(path.read_text())
+    assert d["frames"][0]["zenith_deg"] is None and "reason" in d["frames"][0]
+
+
+def test_truth_files_are_read_by_the_same_reader(tmp_path):
+    t = sample_track()
+    t.format = tf.FORMAT_TRUTH
+    path = tmp_path / "truth.json"
+    tf.write_track(str(path), t)
+    assert tf.read_track(str(path)).format == tf.FORMAT_TRUTH
+
+
+@pytest.mark.parametrize("content,message", [
+    ("{", "not valid JSON"),
+    ('{"format": "other", "version": 1}', "format"),
+    ('{"format": "sunlapse.track", "version": 99}', "version"),
+    ('{"format": "sunlapse.track", "version": 1, "frames": [{"zenith_deg": 1}]}', "frame entry 0"),
+])
+def test_bad_files_give_reasons(tmp_path, content, message):
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    with pytest.raises(tf.TrackFileError, match=message):
+        tf.read_track(str(path))
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(tf.TrackFileError, match="no such file"):
+        tf.read_track(str(tmp_path / "nope.json"))
+
+
+def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
+    path = tmp_path / "t.json"
+    tf.write_track(str(path), sample_track())
+    before = path.read_text()
+    bad = sample_track()
+    bad.extra = {"x": object()}  # not serialisable: the write fails
+    with pytest.raises(TypeError):
+        tf.write_track(str(path), bad)
+    assert path.read_text() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["t.json"]
