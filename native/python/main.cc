@@ -5,10 +5,12 @@ namespace py = pybind11;
 
 namespace sunlapse::python {
 void BindScene(py::module_& m);
+void BindEphemeris(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
   m.doc() = "sunlapse native core: camera, scene ray casting, estimators";
   m.attr("__version__") = "0.1.0";
   sunlapse::python::BindScene(m);
+  sunlapse::python::BindEphemeris(m);
 }
