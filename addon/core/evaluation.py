@@ -1,0 +1,150 @@
+"""Scores a track against the truth: the thesis's Table 5.1 and more.
+
+Azimuths are compared in the scene's world frame (azimuth + north offset of
+each file), so a track that does not know north (offset 0, azimuths relative
+to +Y) is scored correctly against a geographic truth.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+from .trackfile import Track
+
+
+def azimuth_difference_deg(a: float, b: float) -> float:
+    """|a - b| wrapped to [0, 180]."""
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def direction(zenith_deg: float, azimuth_world_deg: float):
+    z, a = math.radians(zenith_deg), math.radians(azimuth_world_deg)
+    return (math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z))
+
+
+def angle_between_deg(u, v) -> float:
+    dot = max(-1.0, min(1.0, sum(x * y for x, y in zip(u, v))))
+    return math.degrees(math.acos(dot))
+
+
+@dataclass
+class Stats:
+    min: float
+    max: float
+    mean: float
+
+    @staticmethod
+    def of(values: Sequence[float]) -> Optional["Stats"]:
+        if not values:
+            return None
+        return Stats(min(values), max(values), sum(values) / len(values))
+
+
+@dataclass
+class SceneReport:
+    name: str
+    frames_total: int
+    frames_estimated: int
+    zenith: Optional[Stats] = None
+    azimuth: Optional[Stats] = None
+    direction: Optional[Stats] = None
+    initial_error_deg: Optional[float] = None
+    message: Optional[str] = None
+    # Per frame, for plots: frame, truth z/a (world), estimate z/a (world).
+    series: List[tuple] = field(default_factory=list)
+
+
+def evaluate(name: str, track: Optional[Track], truth: Track,
+             message: Optional[str] = None) -> SceneReport:
+    """Per-frame errors of `track` against `truth` (frames matched by number)."""
+    report = SceneReport(name=name, frames_total=len(truth.frames), frames_estimated=0,
+                         message=message)
+    if track is None:
+        report.message = message or "no track"
+        return report
+    est_by_frame = {f.frame: f for f in track.frames}
+    dz, da, dd = [], [], []
+    for t in truth.frames:
+        if not t.has_estimate:
+            continue
+        t_az = t.azimuth_deg + truth.north_offset_deg
+        e = est_by_frame.get(t.frame)
+        e_z = e_az = None
+        if e is not None and e.has_estimate:
+            e_z, e_az = e.zenith_deg, e.azimuth_deg + track.north_offset_deg
+            dz.append(abs(e_z - t.zenith_deg))
+            da.append(azimuth_difference_deg(e_az, t_az))
+            dd.append(angle_between_deg(direction(e_z, e_az), direction(t.zenith_deg, t_az)))
+        report.series.append((t.frame, t.zenith_deg, t_az % 360.0, e_z,
+                              None if e_az is None else e_az % 360.0))
+    report.frames_estimated = len(dz)
+    report.zenith, report.azimuth, report.direction = Stats.of(dz), Stats.of(da), Stats.of(dd)
+    init = track.initial or {}
+    if init.get("zenith_deg") is not None and init.get("azimuth_deg") is not None and truth.frames:
+        first = truth.frames[0]
+        report.initial_error_deg = angle_between_deg(
+            direction(init["zenith_deg"], init["azimuth_deg"] + track.north_offset_deg),
+            direction(first.zenith_deg, first.azimuth_deg + truth.north_offset_deg))
+    if report.frames_estimated == 0 and report.message is None:
+        report.message = (track.extra.get("message") if track.extra else None) or \
+            "the track has no estimates"
+    return report
+
+
+def _fmt(v: Optional[float]) -> str:
+    return "-" if v is None else f"{v:.2f}°"
+
+
+def format_table(reports: Sequence[SceneReport]) -> str:
+    """The thesis's Table 5.1 layout, one column per scene, plus our rows."""
+    rows = [
+        ("Zenith Min Error", lambda r: r.zenith and r.zenith.min),
+        ("Zenith Max Error", lambda r: r.zenith and r.zenith.max),
+        ("Zenith Mean Error", lambda r: r.zenith and r.zenith.mean),
+        ("Azimuth Min Error", lambda r: r.azimuth and r.azimuth.min),
+        ("Azimuth Max Error", lambda r: r.azimuth and r.azimuth.max),
+        ("Azimuth Mean Error", lambda r: r.azimuth and r.azimuth.mean),
+        ("Direction Mean Error", lambda r: r.direction and r.direction.mean),
+        ("Direction Max Error", lambda r: r.direction and r.direction.max),
+        ("Initial Sun Error", lambda r: r.initial_error_deg),
+    ]
+    width = max([20] + [len(r.name) + 2 for r in reports])
+    lines = ["".ljust(22) + "".join(r.name.rjust(width) for r in reports)]
+    for label, get in rows:
+        lines.append(label.ljust(22) + "".join(_fmt(get(r)).rjust(width) for r in reports))
+    lines.append("Frames estimated".ljust(22) + "".join(
+        f"{r.frames_estimated}/{r.frames_total}".rjust(width) for r in reports))
+    notes = [f"  {r.name}: {r.message}" for r in reports if r.message]
+    if notes:
+        lines.append("Notes:")
+        lines.extend(notes)
+    return "\n".join(lines)
+
+
+def plot(report: SceneReport, path: str) -> Optional[str]:
+    """Estimated vs true zenith and azimuth over frames (thesis figs 5.2-5.6).
+    Returns the path written, or None when matplotlib is missing."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return None
+    frames = [s[0] for s in report.series]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    for ax, k, label in ((axes[0], 1, "Zenith"), (axes[1], 2, "Azimuth (world)")):
+        ax.plot(frames, [s[k] for s in report.series], "k-", label="truth")
+        est = [(s[0], s[k + 2]) for s in report.series if s[k + 2] is not None]
+        if est:
+            ax.plot([e[0] for e in est], [e[1] for e in est], "r.", ms=3, label="estimate")
+        ax.set_xlabel("frame")
+        ax.set_ylabel(f"{label} (deg)")
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.suptitle(report.name + ("" if not report.message else f" — {report.message}"), fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path

@@ -1,0 +1,100 @@
+"""The accuracy benchmark: every preset end to end, one table.
+
+  python3 bench/accuracy.py [--presets a,b] [--size tiny|small|bench]
+                            [--methods default,thesis] [--out DIR] [--regenerate]
+
+For each preset: render it with examples/generate_scene.py (cached in
+OUT/scenes/<preset>/ unless --regenerate), run examples/run_estimate.py on its
+scene.blend exactly as users do, and score the track against the truth.
+Prints the thesis's Table 5.1 layout per method and writes plots to OUT/plots/.
+Figures are printed, never asserted.
+"""
+import argparse
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+
+import evaluate  # noqa: E402
+from core import evaluation  # noqa: E402
+
+PRESETS = ["plaza", "southern_winter", "tropic_noon", "nordic_autumn", "indoor_window"]
+SIZES = {  # generator flags per size
+    "tiny": ["--tiny"],
+    "small": ["--frames", "24", "--resolution", "320x180", "--samples", "8"],
+    "bench": [],  # the presets' own frame counts, 640x360, 16 samples
+}
+
+
+def blender(*args, log=None):
+    cmd = ["blender", "-b", "--factory-startup", *args]
+    with open(log, "w") if log else open(os.devnull, "w") as fh:
+        return subprocess.run(cmd, stdout=fh, stderr=subprocess.STDOUT).returncode
+
+
+def last_error(log):
+    try:
+        lines = [l.strip() for l in open(log) if "error" in l.lower()]
+        return lines[-1] if lines else "see " + log
+    except OSError:
+        return "see " + log
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--presets", default=",".join(PRESETS))
+    p.add_argument("--size", choices=sorted(SIZES), default="bench")
+    p.add_argument("--methods", default="default")
+    p.add_argument("--out", default=os.path.join(ROOT, "build", "accuracy"))
+    p.add_argument("--regenerate", action="store_true")
+    args = p.parse_args(argv)
+    presets = [s for s in args.presets.split(",") if s]
+    methods = [m for m in args.methods.split(",") if m]
+    out = os.path.abspath(args.out)
+    os.makedirs(os.path.join(out, "logs"), exist_ok=True)
+
+    for preset in presets:
+        scene_dir = os.path.join(out, "scenes", f"{preset}-{args.size}")
+        if args.regenerate or not os.path.exists(os.path.join(scene_dir, "truth.sun.json")):
+            t0 = time.perf_counter()
+            log = os.path.join(out, "logs", f"generate-{preset}.log")
+            rc = blender("--python-exit-code", "1", "--python",
+                         os.path.join(ROOT, "examples", "generate_scene.py"), "--",
+                         "--preset", preset, "--out", scene_dir, *SIZES[args.size], log=log)
+            if rc != 0:
+                sys.exit(f"accuracy: generating {preset} failed: {last_error(log)}")
+            print(f"rendered {preset} in {time.perf_counter() - t0:.0f} s", flush=True)
+
+    for method in methods:
+        reports = []
+        for preset in presets:
+            scene_dir = os.path.join(out, "scenes", f"{preset}-{args.size}")
+            track = os.path.join(out, "tracks", method, f"{preset}.sun.json")
+            os.makedirs(os.path.dirname(track), exist_ok=True)
+            if os.path.exists(track):
+                os.unlink(track)
+            log = os.path.join(out, "logs", f"estimate-{method}-{preset}.log")
+            t0 = time.perf_counter()
+            rc = blender(os.path.join(scene_dir, "scene.blend"), "--python-exit-code", "1",
+                         "--python", os.path.join(ROOT, "examples", "run_estimate.py"), "--",
+                         "--out", track, "--method", method, log=log)
+            seconds = time.perf_counter() - t0
+            report = evaluate.score(preset, track, os.path.join(scene_dir, "truth.sun.json"))
+            if rc != 0:
+                report.message = f"run_estimate failed ({last_error(log)})"
+            elif report.message:
+                report.message += f" [{seconds:.1f} s]"
+            reports.append(report)
+            os.makedirs(os.path.join(out, "plots"), exist_ok=True)
+            evaluation.plot(report, os.path.join(out, "plots", f"{method}-{preset}.png"))
+        print(f"\n== method: {method} (size: {args.size})")
+        print(evaluation.format_table(reports))
+    print(f"\nplots and logs in {out}")
+
+
+if __name__ == "__main__":
+    main()

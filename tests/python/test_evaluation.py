@@ -1,0 +1,75 @@
+import copy
+
+import pytest
+
+from core import evaluation as ev
+from core import trackfile as tf
+
+
+def truth(north=30.0):
+    return tf.Track(format=tf.FORMAT_TRUTH, north_offset_deg=north, frames=[
+        tf.FrameEstimate(frame=i + 1, zenith_deg=40.0 + i, azimuth_deg=350.0 + 2 * i)
+        for i in range(10)])
+
+
+def as_track(t, dz=0.0, da=0.0, north=None):
+    out = copy.deepcopy(t)
+    out.format = tf.FORMAT_TRACK
+    if north is not None:  # same Sun, expressed with another north offset
+        for f in out.frames:
+            f.azimuth_deg = (f.azimuth_deg + t.north_offset_deg - north) % 360
+        out.north_offset_deg = north
+    for f in out.frames:
+        f.zenith_deg += dz
+        f.azimuth_deg = (f.azimuth_deg + da) % 360
+    first = out.frames[0]
+    out.initial = {"zenith_deg": first.zenith_deg, "azimuth_deg": first.azimuth_deg}
+    return out
+
+
+def test_perfect_track_scores_zero():
+    r = ev.evaluate("s", as_track(truth()), truth())
+    assert r.frames_estimated == 10
+    assert r.zenith.max == pytest.approx(0, abs=1e-9)
+    assert r.azimuth.max == pytest.approx(0, abs=1e-9)
+    assert r.direction.max == pytest.approx(0, abs=1e-5)
+    assert r.initial_error_deg == pytest.approx(0, abs=1e-5)
+
+
+def test_offsets_of_two_degrees_score_two():
+    r = ev.evaluate("s", as_track(truth(), dz=2.0), truth())
+    assert r.zenith.min == pytest.approx(2) and r.zenith.mean == pytest.approx(2)
+    assert r.azimuth.max == pytest.approx(0, abs=1e-9)
+    assert r.direction.mean == pytest.approx(2, abs=1e-6)
+    r = ev.evaluate("s", as_track(truth(), da=-2.0), truth())  # across 0/360
+    assert r.azimuth.mean == pytest.approx(2) and r.zenith.mean == pytest.approx(0)
+
+
+def test_unknown_north_track_is_compared_in_world_frame():
+    r = ev.evaluate("s", as_track(truth(north=30.0), north=0.0), truth(north=30.0))
+    assert r.azimuth.max == pytest.approx(0, abs=1e-9)
+
+
+def test_missing_frames_and_missing_track_are_reported_not_scored():
+    t = as_track(truth())
+    t.frames[3].zenith_deg = None
+    del t.frames[5]
+    r = ev.evaluate("s", t, truth())
+    assert r.frames_estimated == 8 and r.frames_total == 10
+    r = ev.evaluate("s", None, truth(), message="no track was produced")
+    assert r.zenith is None and "no track" in r.message
+    table = ev.format_table([r])
+    assert "no track was produced" in table and "Zenith Mean Error" in table
+
+
+def test_empty_track_reports_its_message():
+    t = tf.Track(frames=[], extra={"message": "no estimator exists yet"})
+    r = ev.evaluate("s", t, truth())
+    assert r.frames_estimated == 0 and r.message == "no estimator exists yet"
+    assert "-" in ev.format_table([r])
+
+
+def test_plot_is_written(tmp_path):
+    r = ev.evaluate("s", as_track(truth(), dz=1.0), truth())
+    out = ev.plot(r, str(tmp_path / "s.png"))
+    assert out and (tmp_path / "s.png").stat().st_size > 1000
