@@ -324,19 +324,24 @@ Hits Scene::IntersectPixels(const Camera& camera,
   return hits;
 }
 
-void Scene::Occluded(int64_t n, const float* origins, const float* directions,
-                     float t_near, float t_far, uint8_t* occluded) const {
+namespace {
+// Occlusion tests of n rays whose direction for ray i is dir_at(i) (a
+// pointer to 3 floats, need not be unit); shared by both public forms.
+template <typename DirAt>
+void OccludedBatch(RTCScene scene, int64_t n, const float* origins,
+                   DirAt dir_at, float t_near, float t_far, bool coherent,
+                   uint8_t* occluded) {
   Require(n >= 0, "n must be >= 0");
   Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
-  const Impl& s = *impl_;
   tbb::parallel_for(
       tbb::blocked_range<int64_t>(0, n, kGrain),
       [&](const tbb::blocked_range<int64_t>& r) {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
+        if (coherent) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
         for (int64_t i = r.begin(); i < r.end(); ++i) {
           const float* o = origins + 3 * i;
-          const float* d = directions + 3 * i;
+          const float* d = dir_at(i);
           float norm;
           if (!ValidRay(o, d, &norm)) {
             occluded[i] = 0;
@@ -355,10 +360,29 @@ void Scene::Occluded(int64_t n, const float* origins, const float* directions,
           ray.mask = 0xFFFFFFFFu;
           ray.id = 0;
           ray.flags = 0;
-          rtcOccluded1(s.scene, &ctx, &ray);
+          rtcOccluded1(scene, &ctx, &ray);
           occluded[i] = ray.tfar < 0 ? 1 : 0;  // Embree sets -inf on a hit
         }
       });
+}
+}  // namespace
+
+void Scene::Occluded(int64_t n, const float* origins, const float* directions,
+                     float t_near, float t_far, uint8_t* occluded) const {
+  OccludedBatch(
+      impl_->scene, n, origins, [&](int64_t i) { return directions + 3 * i; },
+      t_near, t_far, false, occluded);
+}
+
+void Scene::OccludedToward(int64_t n, const float* origins,
+                           const Eigen::Vector3f& direction, float t_near,
+                           float t_far, uint8_t* occluded) const {
+  Require(direction.allFinite() && direction.norm() > 0,
+          "direction must be finite and non-zero");
+  const Eigen::Vector3f d = direction.normalized();
+  OccludedBatch(
+      impl_->scene, n, origins, [&](int64_t) { return d.data(); }, t_near,
+      t_far, true, occluded);
 }
 
 }  // namespace sunlapse

@@ -100,6 +100,10 @@ TEST(Scene, OcclusionTowardTheSunSeesTheBoxShadow) {
   EXPECT_EQ(occluded[0], 1);  // east of the box: in its shadow
   EXPECT_EQ(occluded[1], 0);  // west of the box: lit
   EXPECT_EQ(occluded[2], 0);  // beside the shadow: lit
+  uint8_t toward[3];
+  scene.OccludedToward(3, origins, to_sun * 3.f, 1e-3f, INFINITY, toward);
+  EXPECT_EQ(std::vector<uint8_t>(toward, toward + 3),
+            std::vector<uint8_t>(occluded, occluded + 3));
   // A short ray stops before the box.
   scene.Occluded(1, origins, dirs, 1e-3f, 0.5f, occluded);
   EXPECT_EQ(occluded[0], 0);

@@ -74,6 +74,10 @@ class Scene {
   // occluded[i] = 1 if anything lies on ray i between t_near and t_far.
   void Occluded(int64_t n, const float* origins, const float* directions,
                 float t_near, float t_far, uint8_t* occluded) const;
+  // The same toward one shared direction (e.g. a candidate Sun).
+  void OccludedToward(int64_t n, const float* origins,
+                      const Eigen::Vector3f& direction, float t_near,
+                      float t_far, uint8_t* occluded) const;
 
  private:
   struct Impl;
