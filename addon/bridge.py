@@ -248,6 +248,16 @@ def build_camera(info: CameraInfo):
     return cam
 
 
+def scene_north_offset_deg(context) -> float:
+    """North offset of Blender's Sun Position add-on when it is enabled
+    (world azimuth = azimuth + north offset, DESIGN.md §2), else 0."""
+    props = getattr(context.scene, "sun_pos_properties", None)
+    if props is None:
+        return 0.0
+    import math
+    return math.degrees(float(getattr(props, "north_offset", 0.0)))
+
+
 # --------------------------------------------------------------------------
 # Clip
 

@@ -104,8 +104,8 @@ def main(argv):
             raise bridge.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")
         ground = args.ground or bridge.guess_ground(model)
         t0 = time.perf_counter()
-        bridge.build_scene(model)
-        bridge.build_camera(cam)
+        native_scene = bridge.build_scene(model)
+        native_camera = bridge.build_camera(cam)
         t_bvh = time.perf_counter() - t0
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))
@@ -119,19 +119,31 @@ def main(argv):
           f"{clip.width}x{clip.height} frames {frames[0]}:{frames[1]}; ground: "
           f"{', '.join(ground) or 'none found'}")
 
-    message = "no estimator exists yet: the scene was gathered and validated only"
-    track = trackfile.Track(
-        clip=clip.filepath, frame_start=clip.frame_start,
-        north_offset_deg=0.0,
-        method={"initial": None, "smoothing": args.smoothing,
-                "options": {"method": args.method, "frames": list(frames)}},
-        initial=None, frames=[],
-        extra={"message": message})
+    from sunlapse import pipeline
+    options = pipeline.RunOptions(method=args.method, smoothing=args.smoothing,
+                                  north_offset_deg=bridge.scene_north_offset_deg(context))
+    frame_numbers = list(range(frames[0], frames[1] + 1))
+    try:
+        track = pipeline.run(native_scene, native_camera, clip.filepath, clip.frame_start,
+                             frame_numbers, options)
+    except pipeline.PipelineError as e:
+        fail(EXIT_SCENE, str(e))
+    track.clip = clip.filepath
+    track.method["options"].update({"method": args.method, "frames": list(frames),
+                                    "ground": ground})
     trackfile.write_track(args.out, track)
-    print(f"sunlapse: {message}; wrote {args.out}")
+    init = track.initial
+    if init:
+        print(f"sunlapse: initial Sun zenith {init['zenith_deg']:.2f} azimuth "
+              f"{init['azimuth_deg']:.2f} deg (confidence {init['confidence']:.2f}, "
+              f"{init['seconds']:.2f} s){' - ' + init['message'] if init.get('message') else ''}")
+    else:
+        print(f"sunlapse: warning: {track.frames[0].reason}")
+    done = sum(1 for f in track.frames if f.has_estimate)
+    print(f"sunlapse: {done}/{len(track.frames)} frames estimated; wrote {args.out}")
     for flag, value in (("--apply-lamp", args.apply_lamp), ("--render-ar", args.render_ar)):
         if value:
-            print(f"sunlapse: warning: {flag} ignored: no track to apply yet")
+            print(f"sunlapse: warning: {flag} is not implemented yet; ignored")
     if args.save:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save), copy=True)
         print(f"sunlapse: saved {args.save}")

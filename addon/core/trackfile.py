@@ -84,6 +84,17 @@ def _frame_to_json(f: FrameEstimate) -> Dict[str, Any]:
     return d
 
 
+def _clean(value: Any) -> Any:
+    """JSON has no NaN or infinity: such numbers become null, at any depth."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
 def to_json(track: Track) -> Dict[str, Any]:
     d: Dict[str, Any] = dict(track.extra)
     d.update({
@@ -96,7 +107,7 @@ def to_json(track: Track) -> Dict[str, Any]:
         "initial": track.initial,
         "frames": [_frame_to_json(f) for f in track.frames],
     })
-    return d
+    return _clean(d)
 
 
 def write_track(path: str, track: Track) -> None:

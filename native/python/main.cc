@@ -6,6 +6,7 @@ namespace py = pybind11;
 namespace sunlapse::python {
 void BindScene(py::module_& m);
 void BindEphemeris(py::module_& m);
+void BindEstimate(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -13,4 +14,5 @@ PYBIND11_MODULE(_native, m) {
   m.attr("__version__") = "0.1.0";
   sunlapse::python::BindScene(m);
   sunlapse::python::BindEphemeris(m);
+  sunlapse::python::BindEstimate(m);
 }

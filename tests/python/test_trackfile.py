@@ -53,6 +53,17 @@ def test_non_finite_angles_become_null(tmp_path):
     assert d["frames"][0]["zenith_deg"] is None and "reason" in d["frames"][0]
 
 
+def test_non_finite_numbers_anywhere_become_null(tmp_path):
+    t = sample_track()
+    t.initial["spread_deg"] = math.nan
+    t.extra["nested"] = {"values": [1.0, math.inf]}
+    path = tmp_path / "t.json"
+    tf.write_track(str(path), t)
+    d = json.loads(path.read_text())
+    assert d["initial"]["spread_deg"] is None
+    assert d["nested"]["values"] == [1.0, None]
+
+
 def test_truth_files_are_read_by_the_same_reader(tmp_path):
     t = sample_track()
     t.format = tf.FORMAT_TRUTH

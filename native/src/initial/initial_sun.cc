@@ -273,8 +273,8 @@ class AlbedoShadingResidual : public ceres::SizedCostFunction<1, 1, 2> {
 };
 
 void FitIntensities(const Samples& s, const std::vector<float>& shading,
-                    const InitialSunOptions& o, int num_objects,
-                    InitialSunResult* out) {
+                    double loss_scale, const InitialSunOptions& o,
+                    int num_objects, InitialSunResult* out) {
   std::vector<int> count(s.num_groups, 0);
   for (int g : s.group) ++count[g];
   const int ref = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
@@ -283,7 +283,7 @@ void FitIntensities(const Samples& s, const std::vector<float>& shading,
   ceres::Problem problem;
   for (int i = 0; i < s.size(); ++i) {
     problem.AddResidualBlock(new AlbedoShadingResidual(s.intensity[i], shading[i]),
-                             new ceres::CauchyLoss(o.loss_scale), &rho[s.group[i]], light);
+                             new ceres::CauchyLoss(loss_scale), &rho[s.group[i]], light);
   }
   for (int g = 0; g < s.num_groups; ++g) {
     problem.SetParameterLowerBound(&rho[g], 0, 1e-4);
@@ -309,13 +309,13 @@ void FitIntensities(const Samples& s, const std::vector<float>& shading,
   for (int i = 0; i < s.size(); ++i) {
     r[i] = s.intensity[i] - rho[s.group[i]] * (light[0] + light[1] * shading[i]);
   }
-  ResidualStats(r, o.loss_scale, out);
+  ResidualStats(r, loss_scale, out);
 }
 
 void EstimateDefault(const Scene& scene, const Samples& s,
                      const InitialSunOptions& o, const ProgressCallback& progress,
                      int num_objects, InitialSunResult* out) {
-  DirectionCost cost(scene, s, o.loss_scale);
+  DirectionCost cost(scene, s, out->loss_scale_abs);
   const auto candidates = FibonacciHemisphere(o.num_candidates, o.max_zenith_deg);
   std::vector<Evaluated> seen;
   seen.reserve(candidates.size() * 4);
@@ -349,7 +349,7 @@ void EstimateDefault(const Scene& scene, const Samples& s,
     if (e.cost <= threshold) spread = std::max(spread, AngleDeg(e.dir, best.dir));
   }
   cost(best.dir);  // leaves the shading of the best direction in `cost`
-  FitIntensities(s, cost.shading(), o, num_objects, out);
+  FitIntensities(s, cost.shading(), out->loss_scale_abs, o, num_objects, out);
   out->sun_in_world = best.dir;
   out->spread_deg = spread;
   out->confidence = out->inlier_fraction * std::exp(-spread / 5.0);
@@ -466,7 +466,7 @@ void EstimateThesis(const Scene& scene, const Samples& s,
     for (int k = 0; k < K; ++k) model += x[k + 1] * coef[i][k];
     r[i] = s.intensity[i] - model;
   }
-  ResidualStats(r, o.loss_scale, out);
+  ResidualStats(r, out->loss_scale_abs, out);
   out->spread_deg = std::numeric_limits<double>::quiet_NaN();  // thesis gives none
   out->confidence = out->inlier_fraction;
 }
@@ -532,6 +532,9 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
     for (int64_t t = 0; t < scene.num_triangles(); ++t) {
       num_objects = std::max(num_objects, scene.object_id_of_triangle(t) + 1);
     }
+    std::vector<float> sorted = s.intensity;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    out.loss_scale_abs = std::max(1e-4, options.loss_scale * sorted[sorted.size() / 2]);
     out.success = true;
     if (options.method == InitialSunMethod::kThesis) {
       EstimateThesis(scene, s, options, progress, &out);

@@ -59,8 +59,11 @@ struct InitialSunOptions {
   int num_refine_starts = 3;
   // kDefault: refinement stops below this step (degrees).
   double refine_tolerance_deg = 0.02;
-  // kDefault: Cauchy loss scale, in linear intensity units.
-  double loss_scale = 0.03;
+  // Cauchy loss scale as a fraction of the median intensity of the used
+  // pixels, so that it follows the frame's exposure: a fixed scale that suits
+  // a bright frame reads the real lit/shadow contrast of a dim or low-Sun
+  // frame as outliers (seen on the nordic_autumn preset).
+  double loss_scale = 0.35;
   // kDefault: one albedo per object (else one for the whole model).
   bool per_object_albedo = true;
   // Candidate Suns lie at most this far from the zenith (degrees).
@@ -88,6 +91,8 @@ struct InitialSunResult {
   std::vector<double> albedo_per_object;
   // RMS of the residuals of inlier pixels (linear intensity units).
   double residual_rms = 0.0;
+  // The Cauchy scale used, in linear intensity units.
+  double loss_scale_abs = 0.0;
   // Fraction of used pixels the fit explains (|r| < 3 x loss scale).
   double inlier_fraction = 0.0;
   // Angular radius of the set of directions nearly as good as the best.

@@ -1,0 +1,137 @@
+// Bindings of the video and initial-Sun stages.
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <opencv2/core.hpp>
+
+#include "arrays.h"
+#include "sunlapse/initial/initial_sun.h"
+#include "sunlapse/video/video_reader.h"
+
+namespace sunlapse::python {
+namespace {
+
+py::array_t<uint8_t> MatToArray(const cv::Mat& m) {
+  const cv::Mat c = m.isContinuous() ? m : m.clone();
+  py::array_t<uint8_t> out({c.rows, c.cols, c.channels()});
+  std::memcpy(out.mutable_data(), c.data, c.total() * c.elemSize());
+  return out;
+}
+
+// A progress callable from Python: (fraction) -> bool|None; None = go on.
+ProgressCallback WrapProgress(const py::object& fn) {
+  if (fn.is_none()) return nullptr;
+  return [fn](double fraction) {
+    py::gil_scoped_acquire gil;
+    const py::object r = fn(fraction);
+    return r.is_none() || r.cast<bool>();
+  };
+}
+
+InitialSunMethod ParseMethod(const std::string& m) {
+  if (m == "thesis") return InitialSunMethod::kThesis;
+  if (m == "default") return InitialSunMethod::kDefault;
+  throw std::invalid_argument("method: expected 'thesis' or 'default', got '" + m + "'");
+}
+
+}  // namespace
+
+void BindEstimate(py::module_& m) {
+  py::class_<VideoReader>(m, "VideoReader",
+                          "Frames of a movie file or a numbered image sequence, streamed.")
+      .def(py::init<const std::string&>(), py::arg("path"))
+      .def_property_readonly("width", &VideoReader::width)
+      .def_property_readonly("height", &VideoReader::height)
+      .def_property_readonly("fps", &VideoReader::fps)
+      .def_property_readonly("num_frames", &VideoReader::num_frames)
+      .def_property_readonly("position", &VideoReader::position)
+      .def(
+          "read",
+          [](VideoReader& r) -> py::object {
+            cv::Mat bgr;
+            bool more;
+            {
+              py::gil_scoped_release release;
+              more = r.Read(&bgr);
+            }
+            if (!more) throw py::stop_iteration();
+            if (bgr.empty()) return py::none();
+            return MatToArray(bgr);
+          },
+          "Next frame as uint8 (H,W,3) BGR; None for a frame that cannot be "
+          "decoded; raises StopIteration at the end.")
+      .def("seek", &VideoReader::Seek, py::arg("index"));
+
+  m.def(
+      "to_linear_gray",
+      [](const py::array& bgr, double gamma) {
+        CheckArray<uint8_t>(bgr, "image", {-1, -1, 3});
+        const cv::Mat in(static_cast<int>(bgr.shape(0)), static_cast<int>(bgr.shape(1)), CV_8UC3,
+                         const_cast<void*>(bgr.data()));
+        const cv::Mat g = ToLinearGray(in, gamma);
+        py::array_t<float> out({g.rows, g.cols});
+        std::memcpy(out.mutable_data(), g.data, g.total() * sizeof(float));
+        return out;
+      },
+      py::arg("image").noconvert(), py::arg("gamma") = 2.2,
+      "uint8 (H,W,3) BGR -> float32 (H,W) linear gray in [0,1] (value^gamma).");
+
+  m.def(
+      "estimate_initial_sun",
+      [](const Scene& scene, const Camera& camera, const py::array& frame,
+         const std::string& method, int max_pixels, int ignore_top_rows,
+         int ignore_bottom_rows, int num_candidates, double loss_scale,
+         bool per_object_albedo, int thesis_num_lights, const py::object& progress) {
+        const float* data = CheckArray<float>(frame, "frame", {-1, -1});
+        const cv::Mat img(static_cast<int>(frame.shape(0)), static_cast<int>(frame.shape(1)),
+                          CV_32F, const_cast<float*>(data));
+        InitialSunOptions o;
+        o.method = ParseMethod(method);
+        o.max_pixels = max_pixels;
+        o.ignore_top_rows = ignore_top_rows;
+        o.ignore_bottom_rows = ignore_bottom_rows;
+        o.num_candidates = num_candidates;
+        o.loss_scale = loss_scale;
+        o.per_object_albedo = per_object_albedo;
+        o.thesis_num_lights = thesis_num_lights;
+        const ProgressCallback cb = WrapProgress(progress);
+        InitialSunResult r;
+        {
+          py::gil_scoped_release release;
+          r = EstimateInitialSun(scene, camera, img, o, cb);
+        }
+        py::dict d;
+        d["success"] = r.success;
+        d["message"] = r.message;
+        d["zenith_deg"] = r.zenith_deg;
+        d["azimuth_deg"] = r.azimuth_deg;
+        d["sun_in_world"] = r.sun_in_world;
+        d["sun_intensity"] = r.sun_intensity;
+        d["ambient_intensity"] = r.ambient_intensity;
+        d["light_intensities"] = r.light_intensities;
+        d["albedo_per_object"] = r.albedo_per_object;
+        d["residual_rms"] = r.residual_rms;
+        d["inlier_fraction"] = r.inlier_fraction;
+        d["loss_scale_abs"] = r.loss_scale_abs;
+        d["spread_deg"] = r.spread_deg;
+        d["confidence"] = r.confidence;
+        d["num_pixels"] = r.num_pixels;
+        d["seconds"] = r.seconds;
+        return d;
+      },
+      py::arg("scene"), py::arg("camera"), py::arg("frame").noconvert(),
+      py::arg("method") = "default", py::arg("max_pixels") = 12000,
+      py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
+      py::arg("num_candidates") = 300, py::arg("loss_scale") = 0.35,
+      py::arg("per_object_albedo") = true, py::arg("thesis_num_lights") = 8,
+      py::arg("progress") = py::none(),
+      "Sun direction on one frame (float32 (H,W) linear gray, the camera's "
+      "size). Azimuth is in the world frame (clockwise from +Y). Returns a "
+      "dict; success False with a message when the frame cannot fix the Sun "
+      "or the run was cancelled (progress returned False).");
+}
+
+}  // namespace sunlapse::python
