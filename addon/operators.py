@@ -4,7 +4,7 @@ import time
 
 import bpy
 
-from . import bridge, native_loader
+from . import bridge, lamp, native_loader, pipeline
 
 
 def ground_names(settings):
@@ -54,5 +54,52 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (CLIP_OT_sunlapse_check_scene,)
+class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
+    """Estimate the Sun on the current frame of the clip from the model and
+    camera (thesis chapter 3) and point the Sun lamp at it"""
+    bl_idname = "clip.sunlapse_initial_sun"
+    bl_label = "Sun from Current Frame"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        scene = context.scene
+        settings = scene.sunlapse
+        try:
+            native_loader.require()
+            model, cam, clip = gather_all(context, settings)
+            native_scene = bridge.build_scene(model)
+            native_camera = bridge.build_camera(cam)
+            frame = scene.frame_current
+            if not clip.frame_start <= frame <= clip.frame_end:
+                raise bridge.SceneError(f"frame {frame} is outside the clip "
+                                        f"({clip.frame_start}-{clip.frame_end})")
+            options = pipeline.RunOptions(method=settings.method,
+                                          ignore_top_rows=settings.ignore_top_rows,
+                                          north_offset_deg=bridge.scene_north_offset_deg(context))
+            track = pipeline.run(native_scene, native_camera, clip.filepath,
+                                 clip.frame_start, [frame], options)
+        except (bridge.SceneError, pipeline.PipelineError, RuntimeError, ValueError) as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        est = track.frames[0]
+        if not est.has_estimate:
+            self.report({"ERROR"}, est.reason or "no estimate")
+            return {"CANCELLED"}
+        try:
+            sun = lamp.ensure_sun_lamp(context, settings.sun_lamp)
+        except ValueError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        settings.sun_lamp = sun
+        animated = bool(sun.animation_data and sun.animation_data.action)
+        lamp.point_lamp(sun, est.zenith_deg, est.azimuth_deg + track.north_offset_deg,
+                        frame=frame if animated else None)
+        note = track.initial.get("message") if track.initial else None
+        self.report({"WARNING" if note else "INFO"},
+                    f"Sun at zenith {est.zenith_deg:.1f}°, azimuth {est.azimuth_deg:.1f}° "
+                    f"(confidence {est.confidence:.2f})" + (f": {note}" if note else ""))
+        return {"FINISHED"}
+
+
+classes = (CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun)
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -19,7 +19,11 @@ def draw_sun_panel(layout, context):
     col.prop(settings, "model_collection")
     col.prop(settings, "camera")
     col.prop(settings, "ground_objects")
+    col.prop(settings, "sun_lamp")
+    col.prop(settings, "method")
+    col.prop(settings, "ignore_top_rows")
     layout.operator("clip.sunlapse_check_scene", icon="CHECKMARK")
+    layout.operator("clip.sunlapse_initial_sun", icon="LIGHT_SUN")
     if settings.last_report:
         layout.label(text=settings.last_report[:120])
 

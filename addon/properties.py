@@ -1,11 +1,15 @@
 """Properties of sunlapse, kept apart from the UI."""
 
 import bpy
-from bpy.props import PointerProperty, StringProperty
+from bpy.props import EnumProperty, IntProperty, PointerProperty, StringProperty
 
 
 def _is_camera(self, obj):
     return obj.type == "CAMERA"
+
+
+def _is_sun_lamp(self, obj):
+    return obj.type == "LIGHT" and obj.data.type == "SUN"
 
 
 class SunlapseSettings(bpy.types.PropertyGroup):
@@ -20,6 +24,18 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         name="Ground",
         description="Comma-separated names of the ground object(s) the shadows "
                     "fall on; empty: detected automatically")
+    sun_lamp: PointerProperty(
+        name="Sun Lamp", type=bpy.types.Object, poll=_is_sun_lamp,
+        description="Sun lamp to drive; empty: a new one is created")
+    method: EnumProperty(
+        name="Method",
+        items=[("default", "sunlapse", "Our method (dense candidates, albedo, shadows, robust)"),
+               ("thesis", "Thesis", "The thesis's baseline (8 lights + ambient)")],
+        default="default")
+    ignore_top_rows: IntProperty(
+        name="Ignore Top Rows", min=0, default=0,
+        description="Rows at the top of the frame that are not scene content "
+                    "(burned-in time stamps, banners)")
     last_report: StringProperty(name="Last check", default="")
 
 

@@ -28,3 +28,27 @@ def empty_scene():
 def native():
     from sunlapse import native_loader
     return native_loader.require()
+
+
+_generated = {}
+
+
+def generate_preset(preset, tmp_path_factory):
+    """Renders a tiny preset once per test session; returns (folder, truth)."""
+    import subprocess
+    from sunlapse.core import trackfile
+    if preset not in _generated:
+        out = str(tmp_path_factory.mktemp(preset))
+        cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
+               "--python", os.path.join(ROOT, "examples", "generate_scene.py"), "--",
+               "--preset", preset, "--out", out, "--tiny"]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+        _generated[preset] = out
+    out = _generated[preset]
+    return out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+
+
+@pytest.fixture(scope="session")
+def tiny_plaza(tmp_path_factory):
+    return generate_preset("plaza", tmp_path_factory)

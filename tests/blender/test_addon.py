@@ -81,8 +81,11 @@ def test_scripted_run_writes_a_track_for_a_valid_scene(empty_scene, tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(out))
     assert track["format"] == "sunlapse.track" and track["version"] == 1
-    assert track["frames"] == []
-    assert "no estimator" in track["message"]
+    assert [f["frame"] for f in track["frames"]] == [1, 2, 3]
+    # Flat grey frames cannot fix the Sun: whatever comes out has almost no
+    # confidence; later frames wait for shadow tracking and say so.
+    assert track["frames"][0]["confidence"] < 0.1
+    assert all(f["reason"] for f in track["frames"][1:])
     assert track["clip"].endswith("frame_0001.png")
 
 

@@ -2,13 +2,12 @@
 import copy
 import math
 import os
-import subprocess
 
 import bpy
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import generate_preset
 from sunlapse.core import evaluation, trackfile
 
 PRESETS = ["plaza", "southern_winter"]  # north offset 0 and 35 deg, both hemispheres
@@ -16,13 +15,7 @@ PRESETS = ["plaza", "southern_winter"]  # north offset 0 and 35 deg, both hemisp
 
 @pytest.fixture(scope="module", params=PRESETS)
 def generated(request, tmp_path_factory):
-    out = str(tmp_path_factory.mktemp(request.param))
-    cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
-           "--python", os.path.join(ROOT, "examples", "generate_scene.py"), "--",
-           "--preset", request.param, "--out", out, "--tiny"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    return out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+    return generate_preset(request.param, tmp_path_factory)
 
 
 def truth_direction(truth, f):
