@@ -1,5 +1,7 @@
 #include "sunlapse/initial/initial_sun.h"
 
+#include "sunlapse/common/robust_fit.h"
+
 #include <ceres/ceres.h>
 
 #include <algorithm>
@@ -88,8 +90,8 @@ Samples GatherSamples(const Scene& scene, const Camera& camera,
 class DirectionCost {
  public:
   DirectionCost(const Scene& scene, const Samples& s, double loss_scale)
-      : scene_(scene), s_(s), c2_(loss_scale * loss_scale),
-        occluded_(s.size()), shading_(s.size()), residual_(s.size()) {}
+      : scene_(scene), s_(s), scale_(loss_scale), occluded_(s.size()),
+        shading_(s.size()) {}
 
   double operator()(const Eigen::Vector3d& toward_sun) {
     ++evaluations_;
@@ -100,70 +102,21 @@ class DirectionCost {
     for (int i = 0; i < s_.size(); ++i) {
       shading_[i] = occluded_[i] ? 0.f : std::max(0.f, s_.normal[i].dot(d));
     }
-    Fit();
-    double cost = 0;
-    for (int i = 0; i < s_.size(); ++i) {
-      cost += std::log1p(residual_[i] * residual_[i] / c2_);
-    }
-    return cost;
+    RobustAffineFit(s_.size(), shading_.data(), s_.intensity.data(), s_.group.data(),
+                    s_.num_groups, scale_, 4, &fit_);
+    return fit_.cost;
   }
 
   const std::vector<float>& shading() const { return shading_; }
-  const std::vector<double>& ambient() const { return a_; }
-  const std::vector<double>& sun() const { return b_; }
   int evaluations() const { return evaluations_; }
 
  private:
-  void Fit() {
-    const int g = s_.num_groups;
-    a_.assign(g, 0.0);
-    b_.assign(g, 0.0);
-    std::vector<double> w(s_.size(), 1.0);
-    for (int iter = 0; iter < 4; ++iter) {
-      std::vector<Eigen::Matrix2d> ata(g, Eigen::Matrix2d::Zero());
-      std::vector<Eigen::Vector2d> atb(g, Eigen::Vector2d::Zero());
-      for (int i = 0; i < s_.size(); ++i) {
-        const double x = shading_[i], y = s_.intensity[i], wi = w[i];
-        Eigen::Matrix2d& m = ata[s_.group[i]];
-        m(0, 0) += wi;
-        m(0, 1) += wi * x;
-        m(1, 1) += wi * x * x;
-        atb[s_.group[i]] += wi * Eigen::Vector2d(y, x * y);
-      }
-      for (int k = 0; k < g; ++k) {
-        Eigen::Matrix2d& m = ata[k];
-        m(1, 0) = m(0, 1);
-        double a = 0, b = 0;
-        const double det = m.determinant();
-        if (m(0, 0) > 0 && det > 1e-9 * m(0, 0) * std::max(m(1, 1), 1e-12)) {
-          const Eigen::Vector2d ab = m.inverse() * atb[k];
-          a = ab[0];
-          b = ab[1];
-        }
-        if (b <= 0 || !(det > 0)) {  // no sunlit contrast: flat albedo x ambient
-          b = 0;
-          a = m(0, 0) > 0 ? atb[k][0] / m(0, 0) : 0;
-        } else if (a < 0) {
-          a = 0;
-          b = m(1, 1) > 0 ? atb[k][1] / m(1, 1) : 0;
-        }
-        a_[k] = a;
-        b_[k] = b;
-      }
-      for (int i = 0; i < s_.size(); ++i) {
-        const int k = s_.group[i];
-        residual_[i] = s_.intensity[i] - (a_[k] + b_[k] * shading_[i]);
-        w[i] = 1.0 / (1.0 + residual_[i] * residual_[i] / c2_);
-      }
-    }
-  }
-
   const Scene& scene_;
   const Samples& s_;
-  const double c2_;
+  const double scale_;
   std::vector<uint8_t> occluded_;
   std::vector<float> shading_;
-  std::vector<double> residual_, a_, b_;
+  AffineFit fit_;
   int evaluations_ = 0;
 };
 

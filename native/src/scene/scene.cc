@@ -60,6 +60,8 @@ struct Scene::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::vector<int32_t> object_ids;
+  std::vector<float> vertices;     // copies, for callers that need the mesh
+  std::vector<int32_t> triangles;
   int64_t num_vertices = 0;
   Eigen::AlignedBox3f bounds;
 
@@ -187,6 +189,8 @@ Scene::Scene(const float* vertices, int64_t num_vertices,
   rtcCommitScene(s.scene);
   s.CheckDevice("the BVH build");
   s.object_ids.assign(object_ids, object_ids + num_triangles);
+  s.vertices.assign(vertices, vertices + 3 * num_vertices);
+  s.triangles.assign(triangles, triangles + 3 * num_triangles);
   s.num_vertices = num_vertices;
   s.bounds = bounds;
 }
@@ -231,6 +235,14 @@ int64_t Scene::num_vertices() const { return impl_->num_vertices; }
 Eigen::AlignedBox3f Scene::bounds() const { return impl_->bounds; }
 int32_t Scene::object_id_of_triangle(int64_t t) const {
   return impl_->object_ids.at(t);
+}
+Eigen::Vector3f Scene::vertex(int64_t v) const {
+  Require(v >= 0 && v < impl_->num_vertices, "vertex index out of range");
+  return Eigen::Vector3f(&impl_->vertices[3 * v]);
+}
+Eigen::Vector3i Scene::triangle(int64_t t) const {
+  Require(t >= 0 && t < num_triangles(), "triangle index out of range");
+  return Eigen::Vector3i(&impl_->triangles[3 * t]);
 }
 
 void Scene::Intersect(int64_t n, const float* origins, const float* directions,

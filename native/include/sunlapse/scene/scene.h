@@ -59,6 +59,9 @@ class Scene {
   // Axis-aligned bounds of all vertices (world frame).
   Eigen::AlignedBox3f bounds() const;
   int32_t object_id_of_triangle(int64_t t) const;
+  // The model's data as given (world frame).
+  Eigen::Vector3f vertex(int64_t v) const;
+  Eigen::Vector3i triangle(int64_t t) const;
 
   // First hits of n rays (origins/directions n x 3; directions need not be
   // unit, distance is reported along the normalised direction). Rays start at

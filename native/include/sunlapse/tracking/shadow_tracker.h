@@ -1,0 +1,95 @@
+// Following the Sun through the clip by its cast shadows on the ground
+// (thesis chapter 4), done metrically with the scene's model.
+//
+// The thesis tracks one hard shadow in the image (Algorithm 1) and turns its
+// pixel length and image angle into zenith and azimuth, which is exact only
+// for a camera looking straight down. Here the same idea is kept (shadows on
+// the ground, found again frame after frame near where they were) but each
+// frame's Sun is the direction whose cast shadows, ray cast from the model
+// onto the ground, best explain the image in a thin band around the shadows'
+// boundaries. That is metric by construction (3D points from the camera and
+// the model, no pixel lengths, no object heights: the casters' tops are in the
+// model), follows every modelled shadow at once, weighted by how much of its
+// boundary is seen, and costs only the band's rays per frame.
+//
+// The thesis's own tracker lives in thesis_tracker.h as the baseline.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "sunlapse/scene/camera.h"
+#include "sunlapse/scene/scene.h"
+
+namespace sunlapse {
+
+struct ShadowTrackerOptions {
+  // Object ids of the ground the shadows fall on (at least one).
+  std::vector<int32_t> ground_object_ids;
+  // Half-width of the band around predicted shadow boundaries (pixels).
+  int band_radius_px = 4;
+  // At most this many band pixels are used per frame (a regular subsample).
+  int max_band_pixels = 6000;
+  // First search step around the predicted Sun, and the final step (deg).
+  double search_step_deg = 0.5;
+  double tolerance_deg = 0.01;
+  // Cauchy scale as a fraction of the band's median intensity.
+  double loss_scale = 0.35;
+  // Shadow lost when the fitted sun/ambient contrast falls below this (sunny
+  // ground shows 3-10; overcast fits find noise around 0.1-0.2).
+  double min_contrast = 0.5;
+  // Rays per band pixel along each axis: 2 predicts a pixel's lit fraction
+  // from 2x2 sub-pixel rays, as the sensor averages over the pixel, which
+  // gives the boundaries sub-pixel precision.
+  int subsamples = 2;
+  // Rows at the top / bottom that are not scene content (banners).
+  int ignore_top_rows = 0;
+  int ignore_bottom_rows = 0;
+  // Per-pixel ground albedo from the first frame cancels the ground's texture.
+  bool normalize_albedo = true;
+
+  void Check() const;
+};
+
+struct TrackedFrame {
+  // False: no estimate on this frame (reason says why); the angles then hold
+  // the prediction the tracker keeps following.
+  bool ok = false;
+  std::string reason;
+  double zenith_deg = 0.0;   // world frame, azimuth clockwise from +Y
+  double azimuth_deg = 0.0;
+  Eigen::Vector3d sun_in_world = Eigen::Vector3d::UnitZ();
+  double confidence = 0.0;   // 0..1
+  double contrast = 0.0;     // fitted sun / ambient on the ground band
+  int band_pixels = 0;
+  // The longest modelled shadow on this frame: caster foot and shadow tip, in
+  // OpenCV pixels (NaN when no caster's shadow falls in view).
+  Eigen::Vector2d shadow_start_px{NAN, NAN};
+  Eigen::Vector2d shadow_end_px{NAN, NAN};
+  double seconds = 0.0;      // tracking only, decoding excluded
+};
+
+class ShadowTracker {
+ public:
+  // The scene and camera must outlive the tracker.
+  ShadowTracker(const Scene& scene, const Camera& camera,
+                const ShadowTrackerOptions& options);
+  ~ShadowTracker();
+
+  // First frame (CV_32F linear gray, the camera's size) with the Sun found
+  // by the initial estimate: maps the ground, its albedo and the shadows.
+  TrackedFrame Initialize(const cv::Mat& frame,
+                          const Eigen::Vector3d& sun_in_world);
+  // The next frame. An empty Mat marks a frame that could not be decoded.
+  TrackedFrame Track(const cv::Mat& frame);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sunlapse

@@ -1,0 +1,127 @@
+#include "sunlapse/tracking/shadow_tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "sunlapse/initial/initial_sun.h"
+#include "synthetic.h"
+
+namespace sunlapse {
+namespace {
+
+using testing::AngleDeg;
+
+Eigen::Vector3d Sun(double zenith, double azimuth) {
+  const double z = zenith * M_PI / 180, a = azimuth * M_PI / 180;
+  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
+}
+
+// A textured ground (fixed in the world) under noise, like real paving.
+testing::RenderOptions Textured(uint32_t seed) {
+  testing::RenderOptions o;
+  o.noise = 0.01;
+  o.seed = seed;
+  o.supersample = 3;
+  o.albedo = [](int id, const Eigen::Vector3f& p) {
+    if (id != 0) return 0.5;
+    const double tiles = (static_cast<int>(std::floor(p.x() * 2)) + static_cast<int>(std::floor(p.y() * 2))) % 2;
+    return 0.3 + 0.06 * tiles + 0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
+  };
+  return o;
+}
+
+struct Fixture {
+  Scene scene = testing::BoxAndPole().Build();
+  Camera cam = testing::LookAt({3, -11, 8}, {0, 0, 0}, 320, 240);
+  ShadowTrackerOptions Options() const {
+    ShadowTrackerOptions o;
+    o.ground_object_ids = {0};
+    return o;
+  }
+};
+
+// The Sun's path over a clip: zenith from 55 to 40 deg, azimuth 120 to 150.
+Eigen::Vector3d PathAt(int f, int n) {
+  const double t = static_cast<double>(f) / (n - 1);
+  return Sun(55 - 15 * t, 120 + 30 * t);
+}
+
+TEST(ShadowTracker, FollowsRotatingAndShorteningShadowsWithinHalfADegree) {
+  Fixture fx;
+  ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+  const int n = 40;
+  const TrackedFrame first =
+      tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)), PathAt(0, n));
+  ASSERT_TRUE(first.ok) << first.reason;
+  EXPECT_TRUE(std::isfinite(first.shadow_end_px.x()));
+  double worst = 0;
+  for (int f = 1; f < n; ++f) {
+    const cv::Mat img = testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, n), Textured(f + 1));
+    const TrackedFrame r = tracker.Track(img);
+    ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
+    worst = std::max(worst, AngleDeg(r.sun_in_world, PathAt(f, n)));
+    EXPECT_GT(r.confidence, 0.3);
+  }
+  EXPECT_LT(worst, 0.5);
+}
+
+TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
+  Fixture fx;
+  // The footage has a person-sized box walking across the pole's shadow.
+  ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+  const int n = 30;
+  tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)), PathAt(0, n));
+  int lost = 0;
+  for (int f = 1; f < n; ++f) {
+    cv::Mat img;
+    if (f == 8 || f == 9) {
+      img = cv::Mat(240, 320, CV_32F, 0.f);  // black frames
+    } else if (f >= 15 && f <= 20) {
+      testing::Mesh m = testing::BoxAndPole();
+      const float x = 1.0f + 0.5f * (f - 15);
+      m.Box({x, -4.5f, 0}, {x + 0.4f, -4.1f, 1.8f}, 3);  // a walker, not in the model
+      img = testing::RenderLambertian(m.Build(), fx.cam, PathAt(f, n), Textured(f + 1));
+    } else {
+      img = testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, n), Textured(f + 1));
+    }
+    const TrackedFrame r = tracker.Track(img);
+    if (f == 8 || f == 9) {
+      EXPECT_FALSE(r.ok);
+      EXPECT_EQ(r.reason, "frame is black");
+      ++lost;
+      continue;
+    }
+    ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
+    EXPECT_LT(AngleDeg(r.sun_in_world, PathAt(f, n)), 1.0) << "frame " << f;
+  }
+  EXPECT_EQ(lost, 2);
+}
+
+TEST(ShadowTracker, UndecodableAndFlatFramesAreReportedNotGuessed) {
+  Fixture fx;
+  ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+  tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 130), Textured(1)), Sun(40, 130));
+  TrackedFrame r = tracker.Track(cv::Mat());
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.reason, "frame cannot be decoded");
+  // Overcast: no direct Sun, the ground shows only its texture.
+  testing::RenderOptions overcast = Textured(3);
+  overcast.sun = 0.0;
+  overcast.ambient = 0.6;
+  r = tracker.Track(testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 131), overcast));
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.reason.find("shadow lost"), std::string::npos);
+}
+
+TEST(ShadowTracker, RejectsBadSetup) {
+  Fixture fx;
+  ShadowTrackerOptions o;  // no ground
+  EXPECT_THROW(ShadowTracker(fx.scene, fx.cam, o), std::invalid_argument);
+  ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+  EXPECT_THROW(tracker.Track(cv::Mat(240, 320, CV_32F, 0.5f)), std::invalid_argument);
+  EXPECT_THROW(tracker.Initialize(cv::Mat(10, 10, CV_32F), Sun(40, 0)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sunlapse
