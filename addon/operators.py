@@ -74,16 +74,14 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
                 raise bridge.SceneError(f"frame {frame} is outside the clip "
                                         f"({clip.frame_start}-{clip.frame_end})")
             options = pipeline.RunOptions(method=settings.method,
-                                          ignore_top_rows=settings.ignore_top_rows,
-                                          north_offset_deg=bridge.scene_north_offset_deg(context))
-            track = pipeline.run(native_scene, native_camera, clip.filepath,
-                                 clip.frame_start, [frame], options)
+                                          ignore_top_rows=settings.ignore_top_rows)
+            bgr = pipeline.read_frame(clip.filepath, frame - clip.frame_start)
+            init = pipeline.estimate_initial(native_scene, native_camera, bgr, options)
         except (bridge.SceneError, pipeline.PipelineError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        est = track.frames[0]
-        if not est.has_estimate:
-            self.report({"ERROR"}, est.reason or "no estimate")
+        if not init["success"]:
+            self.report({"ERROR"}, f"No Sun found on frame {frame}: {init['message']}")
             return {"CANCELLED"}
         try:
             sun = lamp.ensure_sun_lamp(context, settings.sun_lamp)
@@ -92,12 +90,14 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
             return {"CANCELLED"}
         settings.sun_lamp = sun
         animated = bool(sun.animation_data and sun.animation_data.action)
-        lamp.point_lamp(sun, est.zenith_deg, est.azimuth_deg + track.north_offset_deg,
+        # The estimate is in the world frame: the lamp needs nothing more.
+        lamp.point_lamp(sun, init["zenith_deg"], init["azimuth_deg"],
                         frame=frame if animated else None)
-        note = track.initial.get("message") if track.initial else None
+        note = init["message"]
         self.report({"WARNING" if note else "INFO"},
-                    f"Sun at zenith {est.zenith_deg:.1f}°, azimuth {est.azimuth_deg:.1f}° "
-                    f"(confidence {est.confidence:.2f})" + (f": {note}" if note else ""))
+                    f"Sun at zenith {init['zenith_deg']:.1f}°, world azimuth "
+                    f"{init['azimuth_deg']:.1f}° (confidence {init['confidence']:.2f})"
+                    + (f": {note}" if note else ""))
         return {"FINISHED"}
 
 

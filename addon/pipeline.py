@@ -1,36 +1,48 @@
 """The estimation pipeline, shared by the scripted run and the operators.
 
 bpy-free: it takes what bridge.py gathered and returns a trackfile.Track.
-Stages that do not exist yet leave their frames as null with a reason.
+Frames are streamed from the clip one at a time (memory does not grow with
+its length): the first gets the initial Sun (thesis ch. 3), the rest are
+tracked by their shadows (ch. 4), then the angles are smoothed (§5).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable, Optional, Sequence
+import time
+from dataclasses import dataclass, field
+from typing import Callable, List, Optional, Sequence
 
 from . import native_loader
-from .core import trackfile
+from .core import smoothing, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
 GAMMA = {"thesis": 1.0, "default": 2.2}
+# Two-pass smoothing: the thesis fits straight lines; over hours the Sun's
+# angles bend, so ours allows a cubic.
+TWO_PASS_DEGREE = {"thesis": 1, "default": 3}
 
 
 class PipelineError(Exception):
-    """The run cannot go on (unreadable clip, ...); the message says why."""
+    """The run cannot go on (unreadable clip, cancelled, ...): says why."""
 
 
 @dataclass
 class RunOptions:
     method: str = "default"           # "thesis" | "default"
-    smoothing: str = "two_pass"        # "online" | "two_pass" | "physical"
+    smoothing: str = "two_pass"        # "online" | "two_pass"
     ignore_top_rows: int = 0
     north_offset_deg: float = 0.0      # scene +Y from north (Sun Position add-on)
+    ground_object_ids: List[int] = field(default_factory=list)
 
 
-def read_frame(path: str, index: int):
-    """Frame `index` (0-based) of a clip as uint8 BGR, or raise PipelineError."""
+def _check_progress(progress, fraction):
+    if progress is not None and progress(fraction) is False:
+        raise PipelineError("cancelled")
+
+
+def open_clip(path: str, index: int):
+    """A VideoReader positioned at 0-based frame `index`."""
     native = native_loader.require()
     try:
         reader = native.VideoReader(path)
@@ -38,8 +50,13 @@ def read_frame(path: str, index: int):
         raise PipelineError(f"cannot read the clip: {e}")
     if not reader.seek(index):
         raise PipelineError(f"the clip has no frame {index + 1}")
+    return reader
+
+
+def read_frame(path: str, index: int):
+    """Frame `index` (0-based) of a clip as uint8 BGR, or raise PipelineError."""
     try:
-        frame = reader.read()
+        frame = open_clip(path, index).read()
     except StopIteration:
         frame = None
     if frame is None:
@@ -47,43 +64,111 @@ def read_frame(path: str, index: int):
     return frame
 
 
-def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
-        options: RunOptions, progress: Optional[Callable[[float], bool]] = None
-        ) -> trackfile.Track:
-    """Estimates the Sun on `frames` (scene frame numbers) of the clip."""
+def _gray(bgr, camera, method):
     native = native_loader.require()
-    first = frames[0]
-    bgr = read_frame(clip_path, first - clip_frame_start)
     if bgr.shape[1] != camera.width or bgr.shape[0] != camera.height:
         raise PipelineError(f"clip frames are {bgr.shape[1]}x{bgr.shape[0]} but the camera "
                             f"expects {camera.width}x{camera.height}")
-    gray = native.to_linear_gray(bgr, GAMMA[options.method])
-    init = native.estimate_initial_sun(scene, camera, gray, method=options.method,
+    return native.to_linear_gray(bgr, GAMMA[method])
+
+
+def estimate_initial(scene, camera, bgr, options: RunOptions, progress=None) -> dict:
+    """The initial Sun on one frame (uint8 BGR); the native result dict."""
+    native = native_loader.require()
+    init = native.estimate_initial_sun(scene, camera, _gray(bgr, camera, options.method),
+                                       method=options.method,
                                        ignore_top_rows=options.ignore_top_rows,
                                        progress=progress)
     if init["message"] == "cancelled":
         raise PipelineError("cancelled")
+    return init
+
+
+def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
+        options: RunOptions, progress: Optional[Callable[[float], bool]] = None
+        ) -> trackfile.Track:
+    """Estimates the Sun on `frames` (consecutive scene frame numbers)."""
+    native = native_loader.require()
+    if not options.ground_object_ids:
+        raise PipelineError("no ground object: name the ground the shadows fall on "
+                            "(--ground, or Ground in the panel)")
+    frames = list(frames)
+    reader = open_clip(clip_path, frames[0] - clip_frame_start)
+    try:
+        first_bgr = reader.read()
+    except StopIteration:
+        first_bgr = None
+    if first_bgr is None:
+        raise PipelineError(f"frame {frames[0]} of the clip cannot be decoded")
     north = options.north_offset_deg
     track = trackfile.Track(
         frame_start=clip_frame_start, north_offset_deg=north,
-        method={"initial": options.method, "smoothing": options.smoothing,
+        method={"initial": options.method, "tracking": options.method,
+                "smoothing": options.smoothing,
                 "options": {"gamma": GAMMA[options.method]}})
-    if init["success"]:
-        az = (init["azimuth_deg"] - north) % 360.0
-        track.initial = {"zenith_deg": init["zenith_deg"], "azimuth_deg": az,
-                         "residual": init["residual_rms"], "confidence": init["confidence"],
-                         "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
-                         "ambient_intensity": init["ambient_intensity"],
-                         "seconds": init["seconds"], "message": init["message"] or None}
-        track.frames.append(trackfile.FrameEstimate(
-            frame=first, zenith_deg=init["zenith_deg"], azimuth_deg=az,
-            raw_zenith_deg=init["zenith_deg"], raw_azimuth_deg=az,
-            confidence=init["confidence"]))
+
+    t0 = time.perf_counter()
+    sub = None if progress is None else (lambda f: progress(0.1 * f))
+    init = estimate_initial(scene, camera, first_bgr, options, sub)
+    if not init["success"]:
+        reason = f"initial Sun failed: {init['message']}"
+        track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
+        track.extra["message"] = reason
+        return track
+    az0 = (init["azimuth_deg"] - north) % 360.0
+    track.initial = {"zenith_deg": init["zenith_deg"], "azimuth_deg": az0,
+                     "residual": init["residual_rms"], "confidence": init["confidence"],
+                     "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
+                     "ambient_intensity": init["ambient_intensity"],
+                     "seconds": init["seconds"], "message": init["message"] or None}
+
+    if options.method == "thesis":
+        tracker = native.ThesisTracker(scene, camera, options.ground_object_ids,
+                                       ignore_top_rows=options.ignore_top_rows)
     else:
-        track.frames.append(trackfile.FrameEstimate(
-            frame=first, reason=f"initial Sun failed: {init['message']}"))
-    for f in frames[1:]:
-        track.frames.append(trackfile.FrameEstimate(
-            frame=f, reason="shadow tracking is not implemented yet"))
-    track.extra["initial_result"] = {k: init[k] for k in ("success", "message", "num_pixels")}
+        tracker = native.ShadowTracker(scene, camera, options.ground_object_ids,
+                                       ignore_top_rows=options.ignore_top_rows)
+    first = tracker.initialize(_gray(first_bgr, camera, options.method), init["sun_in_world"])
+    raws = [(frames[0], init["zenith_deg"], az0, init["confidence"], None, first)]
+    if not first.ok:
+        raws[0] = raws[0][:4] + (None, first)
+        track.extra["tracking_message"] = first.reason
+    track_seconds = 0.0
+    ended = None
+    for k, f in enumerate(frames[1:], start=1):
+        _check_progress(progress, 0.1 + 0.85 * k / len(frames))
+        if ended is None:
+            try:
+                bgr = reader.read()
+            except StopIteration:
+                ended = f
+        if ended is not None:
+            raws.append((f, None, None, 0.0, "the clip ended before this frame", None))
+            continue
+        gray = None if bgr is None else _gray(bgr, camera, options.method)
+        r = tracker.track(gray)
+        track_seconds += r.seconds
+        if r.ok:
+            raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
+        else:
+            raws.append((f, None, None, 0.0, r.reason, r))
+
+    _check_progress(progress, 0.97)
+    numbers = [r[0] for r in raws]
+    zs, azs = smoothing.smooth_angles(
+        numbers, [r[1] for r in raws], [r[2] for r in raws], [r[3] for r in raws],
+        options.smoothing, degree=TWO_PASS_DEGREE[options.method])
+    for (f, z, a, conf, reason, res), zs_f, as_f in zip(raws, zs, azs):
+        est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,
+                                      raw_zenith_deg=z, raw_azimuth_deg=a,
+                                      confidence=conf, reason=reason)
+        if res is not None and res.shadow_end_px[0] == res.shadow_end_px[0]:  # not NaN
+            est.shadow_start_px = list(res.shadow_start_px)
+            est.shadow_end_px = list(res.shadow_end_px)
+        track.frames.append(est)
+    n_track = max(1, len(frames) - 1)
+    track.extra["timing"] = {"initial_s": init["seconds"],
+                             "tracking_ms_per_frame": 1000.0 * track_seconds / n_track,
+                             "total_s": time.perf_counter() - t0}
+    _check_progress(progress, 1.0)
     return track

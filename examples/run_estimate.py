@@ -120,8 +120,11 @@ def main(argv):
           f"{', '.join(ground) or 'none found'}")
 
     from sunlapse import pipeline
+    if args.smoothing == "physical":
+        fail(EXIT_USAGE, "--smoothing physical is not implemented yet; use online or two_pass")
     options = pipeline.RunOptions(method=args.method, smoothing=args.smoothing,
-                                  north_offset_deg=bridge.scene_north_offset_deg(context))
+                                  north_offset_deg=bridge.scene_north_offset_deg(context),
+                                  ground_object_ids=model.ids_of(ground))
     frame_numbers = list(range(frames[0], frames[1] + 1))
     try:
         track = pipeline.run(native_scene, native_camera, clip.filepath, clip.frame_start,

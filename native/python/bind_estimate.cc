@@ -9,6 +9,8 @@
 
 #include "arrays.h"
 #include "sunlapse/initial/initial_sun.h"
+#include "sunlapse/tracking/shadow_tracker.h"
+#include "sunlapse/tracking/thesis_tracker.h"
 #include "sunlapse/video/video_reader.h"
 
 namespace sunlapse::python {
@@ -37,9 +39,115 @@ InitialSunMethod ParseMethod(const std::string& m) {
   throw std::invalid_argument("method: expected 'thesis' or 'default', got '" + m + "'");
 }
 
+cv::Mat GrayArg(const py::object& frame) {
+  if (frame.is_none()) return {};  // an undecodable frame
+  const py::array a = frame.cast<py::array>();
+  const float* data = CheckArray<float>(a, "frame", {-1, -1});
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_32F,
+                 const_cast<float*>(data));
+}
+
+py::dict TrackedToDict(const TrackedFrame& r) {
+  py::dict d;
+  d["ok"] = r.ok;
+  d["reason"] = r.reason;
+  d["zenith_deg"] = r.zenith_deg;
+  d["azimuth_deg"] = r.azimuth_deg;
+  d["sun_in_world"] = r.sun_in_world;
+  d["confidence"] = r.confidence;
+  d["contrast"] = r.contrast;
+  d["band_pixels"] = r.band_pixels;
+  d["shadow_start_px"] = r.shadow_start_px;
+  d["shadow_end_px"] = r.shadow_end_px;
+  d["seconds"] = r.seconds;
+  return d;
+}
+
 }  // namespace
 
 void BindEstimate(py::module_& m) {
+  py::class_<ShadowTracker>(m, "ShadowTracker",
+                            "Follows the Sun through a clip by the model's cast shadows "
+                            "on the ground (metric; see shadow_tracker.h).")
+      .def(py::init([](const Scene& scene, const Camera& camera,
+                       std::vector<int32_t> ground_object_ids, int ignore_top_rows,
+                       int ignore_bottom_rows, int band_radius_px, int max_band_pixels,
+                       double min_contrast, int subsamples, bool normalize_albedo) {
+             ShadowTrackerOptions o;
+             o.ground_object_ids = std::move(ground_object_ids);
+             o.ignore_top_rows = ignore_top_rows;
+             o.ignore_bottom_rows = ignore_bottom_rows;
+             o.band_radius_px = band_radius_px;
+             o.max_band_pixels = max_band_pixels;
+             o.min_contrast = min_contrast;
+             o.subsamples = subsamples;
+             o.normalize_albedo = normalize_albedo;
+             return std::make_unique<ShadowTracker>(scene, camera, o);
+           }),
+           py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
+           py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
+           py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 6000,
+           py::arg("min_contrast") = 0.5, py::arg("subsamples") = 2,
+           py::arg("normalize_albedo") = true,
+           py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
+      .def(
+          "initialize",
+          [](ShadowTracker& t, const py::object& frame, const Eigen::Vector3d& sun) {
+            const cv::Mat img = GrayArg(frame);
+            py::gil_scoped_release release;
+            return t.Initialize(img, sun);
+          },
+          py::arg("frame"), py::arg("sun_in_world"))
+      .def(
+          "track",
+          [](ShadowTracker& t, const py::object& frame) {
+            const cv::Mat img = GrayArg(frame);
+            py::gil_scoped_release release;
+            return t.Track(img);
+          },
+          py::arg("frame"),
+          "Next frame (float32 (H,W) linear gray, or None if it could not be decoded).");
+  py::class_<ThesisTracker>(m, "ThesisTracker",
+                            "The thesis's tracker (five criteria + Algorithm 1), the baseline.")
+      .def(py::init([](const Scene& scene, const Camera& camera,
+                       std::vector<int32_t> ground_object_ids, int ignore_top_rows) {
+             ThesisTrackerOptions o;
+             o.ground_object_ids = std::move(ground_object_ids);
+             o.ignore_top_rows = ignore_top_rows;
+             return std::make_unique<ThesisTracker>(scene, camera, o);
+           }),
+           py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
+           py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
+      .def(
+          "initialize",
+          [](ThesisTracker& t, const py::object& frame, const Eigen::Vector3d& sun) {
+            const cv::Mat img = GrayArg(frame);
+            py::gil_scoped_release release;
+            return t.Initialize(img, sun);
+          },
+          py::arg("frame"), py::arg("sun_in_world"))
+      .def(
+          "track",
+          [](ThesisTracker& t, const py::object& frame) {
+            const cv::Mat img = GrayArg(frame);
+            py::gil_scoped_release release;
+            return t.Track(img);
+          },
+          py::arg("frame"));
+  py::class_<TrackedFrame>(m, "TrackedFrame")
+      .def("as_dict", &TrackedToDict)
+      .def_readonly("ok", &TrackedFrame::ok)
+      .def_readonly("reason", &TrackedFrame::reason)
+      .def_readonly("zenith_deg", &TrackedFrame::zenith_deg)
+      .def_readonly("azimuth_deg", &TrackedFrame::azimuth_deg)
+      .def_readonly("sun_in_world", &TrackedFrame::sun_in_world)
+      .def_readonly("confidence", &TrackedFrame::confidence)
+      .def_readonly("contrast", &TrackedFrame::contrast)
+      .def_readonly("band_pixels", &TrackedFrame::band_pixels)
+      .def_readonly("shadow_start_px", &TrackedFrame::shadow_start_px)
+      .def_readonly("shadow_end_px", &TrackedFrame::shadow_end_px)
+      .def_readonly("seconds", &TrackedFrame::seconds);
+
   py::class_<VideoReader>(m, "VideoReader",
                           "Frames of a movie file or a numbered image sequence, streamed.")
       .def(py::init<const std::string&>(), py::arg("path"))

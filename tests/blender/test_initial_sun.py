@@ -34,20 +34,20 @@ def test_operator_points_a_new_sun_lamp_at_the_sun(tiny_plaza):
 
 
 @pytest.mark.parametrize("method", ["default", "thesis"])
-def test_scripted_run_estimates_the_first_frame(tiny_plaza, tmp_path, method):
+def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
     out, truth = tiny_plaza
     track_path = str(tmp_path / f"{method}.sun.json")
     proc = run_estimate(os.path.join(out, "scene.blend"), track_path, "--method", method)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(track_path))
-    assert track["method"]["initial"] == method
-    assert len(track["frames"]) == 3
-    first = track["frames"][0]
-    if method == "default":
-        assert track["initial"] is not None
-        est = evaluation.direction(first["zenith_deg"], first["azimuth_deg"] + track["north_offset_deg"])
-        assert evaluation.angle_between_deg(est, truth_dir(truth)) < 5.0
-    else:  # the baseline may fail on a frame; then it must say why
-        assert track["initial"] is not None or first["reason"]
-    for later in track["frames"][1:]:
-        assert later["zenith_deg"] is None and later["reason"]
+    assert track["method"]["initial"] == method and track["method"]["tracking"] == method
+    assert [f["frame"] for f in track["frames"]] == [1, 2, 3]
+    assert track["initial"] is not None or track["frames"][0]["reason"]
+    for f, t in zip(track["frames"], truth.frames):
+        assert f["zenith_deg"] is not None or f["reason"], f
+        if method == "default":
+            # A sanity bound at 128x96 pixels; accuracy targets live in the report.
+            est = evaluation.direction(f["zenith_deg"], f["azimuth_deg"] + track["north_offset_deg"])
+            tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
+            assert evaluation.angle_between_deg(est, tru) < 5.0
+            assert f["shadow"]["end_px"] and f["confidence"] > 0

@@ -8,6 +8,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "casters.h"
 #include "sunlapse/common/robust_fit.h"
 
 namespace sunlapse {
@@ -25,11 +26,6 @@ void AnglesOf(const Eigen::Vector3d& d, double* zenith, double* azimuth) {
   const double a = std::atan2(d.x(), d.y()) / kDeg;
   *azimuth = a < 0 ? a + 360.0 : a;
 }
-
-// A caster of the model: its highest point and the ground point below it.
-struct Caster {
-  Eigen::Vector3f top, foot;
-};
 
 }  // namespace
 
@@ -59,7 +55,7 @@ struct ShadowTracker::Impl {
   std::vector<Eigen::Vector3f> normal;
   std::vector<Eigen::Vector3f> dpdx, dpdy;  // ground point per pixel step
   std::vector<float> albedo;           // relative, median 1
-  std::vector<Caster> casters;
+  std::vector<internal::Caster> casters;
 
   // Tracking state.
   bool initialized = false;
@@ -78,10 +74,7 @@ struct ShadowTracker::Impl {
   Impl(const Scene& s, const Camera& c, const ShadowTrackerOptions& opt)
       : scene(s), camera(c), o(opt), W(c.width()), H(c.height()) {}
 
-  bool IsGround(int32_t id) const {
-    return std::find(o.ground_object_ids.begin(), o.ground_object_ids.end(), id) !=
-           o.ground_object_ids.end();
-  }
+  bool IsGround(int32_t id) const { return internal::IsGround(o.ground_object_ids, id); }
 
   void MapGround() {
     ground_index = cv::Mat1i(H, W, -1);
@@ -121,32 +114,6 @@ struct ShadowTracker::Impl {
     for (int g = 0; g < static_cast<int>(pixel.size()); ++g) {
       dpdx[g] = derivative(g, 1, 0);
       dpdy[g] = derivative(g, 0, 1);
-    }
-  }
-
-  void FindCasters() {
-    // Per non-ground object: its highest vertex, and below it the object's
-    // lowest level (where it stands).
-    struct Ext {
-      Eigen::Vector3f top{0, 0, -kInf};
-      float bottom = kInf;
-    };
-    std::vector<Ext> ext;
-    for (int64_t t = 0; t < scene.num_triangles(); ++t) {
-      const int32_t id = scene.object_id_of_triangle(t);
-      if (IsGround(id)) continue;
-      if (id >= static_cast<int32_t>(ext.size())) ext.resize(id + 1);
-      const Eigen::Vector3i tri = scene.triangle(t);
-      for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3f v = scene.vertex(tri[k]);
-        if (v.z() > ext[id].top.z()) ext[id].top = v;
-        ext[id].bottom = std::min(ext[id].bottom, v.z());
-      }
-    }
-    for (const Ext& e : ext) {
-      if (std::isfinite(e.bottom) && e.top.z() > e.bottom) {
-        casters.push_back({e.top, Eigen::Vector3f(e.top.x(), e.top.y(), e.bottom)});
-      }
     }
   }
 
@@ -308,20 +275,17 @@ struct ShadowTracker::Impl {
     out->sun_in_world = d;
     // The longest modelled shadow whose tip lands on the ground in view.
     double longest = 0;
-    for (const Caster& c : casters) {
-      const float o3[3] = {c.top.x(), c.top.y(), c.top.z()};
-      const float d3[3] = {static_cast<float>(-d.x()), static_cast<float>(-d.y()),
-                           static_cast<float>(-d.z())};
-      Hits hit(1);
-      scene.Intersect(1, o3, d3, 1e-3f, kInf, hit.buffers());
-      if (!hit.hit(0) || !IsGround(hit.object_id[0])) continue;
+    for (const internal::Caster& c : casters) {
+      Eigen::Vector3f top, tip;
+      if (!internal::ShadowTip(scene, c, d, o.ground_object_ids, &top, &tip)) continue;
+      const Eigen::Vector3f foot = c.FootBelow(top);
       Eigen::Vector2d foot_px, tip_px;
-      if (!camera.WorldToPixel(c.foot.cast<double>(), &foot_px) ||
-          !camera.WorldToPixel(hit.point(0).cast<double>(), &tip_px)) {
+      if (!camera.WorldToPixel(foot.cast<double>(), &foot_px) ||
+          !camera.WorldToPixel(tip.cast<double>(), &tip_px)) {
         continue;
       }
       if (tip_px.x() < 0 || tip_px.y() < 0 || tip_px.x() > W - 1 || tip_px.y() > H - 1) continue;
-      const double length = (hit.point(0) - c.foot).norm();
+      const double length = (tip - foot).norm();
       if (length > longest) {
         longest = length;
         out->shadow_start_px = foot_px;
@@ -363,7 +327,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector
   TrackedFrame out;
   const Eigen::Vector3d d = sun_in_world.normalized();
   s.MapGround();
-  s.FindCasters();
+  s.casters = internal::FindCasters(s.scene, s.o.ground_object_ids);
   s.sun = s.sun_before = d;
   s.have_velocity = false;
   s.lost = 0;

@@ -1,0 +1,100 @@
+"""Smoothing of the per-frame Sun angles (thesis §5, "online" and "two-pass").
+
+bpy-free, numpy only. Every function takes frame numbers, raw values (None or
+NaN where a frame has no estimate) and weights (confidence), and returns a
+value for every frame. Azimuths are unwrapped before fitting and wrapped to
+[0, 360) after.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Optional, Sequence
+
+import numpy as np
+
+
+def _arrays(frames, values, weights):
+    t = np.asarray(frames, dtype=float)
+    v = np.array([np.nan if x is None else float(x) for x in values], dtype=float)
+    w = np.asarray(weights, dtype=float) if weights is not None else np.ones_like(v)
+    w = np.where(np.isfinite(v) & (w > 0), w, 0.0)
+    return t, v, w
+
+
+def unwrap_deg(values: Sequence[Optional[float]]) -> np.ndarray:
+    """Unwraps angles in degrees across missing entries."""
+    v = np.array([np.nan if x is None else float(x) for x in values], dtype=float)
+    good = np.isfinite(v)
+    if good.any():
+        v[good] = np.degrees(np.unwrap(np.radians(v[good])))
+    return v
+
+
+def online(frames, values, weights=None, alpha=0.3, window=15):
+    """The thesis's online mode: exponential smoothing of the incoming values,
+    then a linear regression over the last `window` smoothed values, evaluated
+    at the current frame (it removes the lag of the exponential filter).
+    Causal: frame k uses frames <= k only. Frames before the first estimate
+    get None."""
+    t, v, w = _arrays(frames, values, weights)
+    out = []
+    s = None
+    hist_t, hist_s = [], []
+    for k in range(len(t)):
+        if w[k] > 0:
+            s = v[k] if s is None else alpha * v[k] + (1 - alpha) * s
+            hist_t.append(t[k])
+            hist_s.append(s)
+            hist_t, hist_s = hist_t[-window:], hist_s[-window:]
+        if s is None:
+            out.append(None)
+            continue
+        if len(hist_t) >= 3:
+            slope, icpt = np.polyfit(hist_t, hist_s, 1)
+            # Exponential smoothing lags by (1-alpha)/alpha samples on a ramp.
+            lag = (1 - alpha) / alpha
+            step = (hist_t[-1] - hist_t[0]) / max(1, len(hist_t) - 1)
+            out.append(float(slope * (t[k] + lag * step) + icpt))
+        else:
+            out.append(float(s))
+    return out
+
+
+def two_pass(frames, values, weights=None, degree=1, iterations=6):
+    """Fits the whole clip with a polynomial in time (degree 1 is the thesis's
+    "linear curves"), robustly (Huber-weighted iterations), weighted by
+    confidence. Returns None everywhere when nothing was estimated."""
+    t, v, w = _arrays(frames, values, weights)
+    good = w > 0
+    if good.sum() == 0:
+        return [None] * len(t)
+    degree = int(min(degree, max(0, good.sum() - 1)))
+    t0, span = t[good].mean(), max(1.0, np.ptp(t[good]))
+    x = (t - t0) / span
+    robust = np.ones_like(w)
+    coef = None
+    for _ in range(iterations):
+        ww = w * robust
+        coef = np.polyfit(x[good], v[good], degree, w=np.sqrt(ww[good]))
+        r = v - np.polyval(coef, x)
+        scale = 1.4826 * np.median(np.abs(r[good])) + 1e-6
+        k = 1.5 * scale
+        a = np.abs(np.nan_to_num(r))
+        robust = np.where(a <= k, 1.0, k / np.maximum(a, 1e-12))
+    return [float(y) for y in np.polyval(coef, x)]
+
+
+def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, **kw):
+    """Smooths zenith and azimuth together; returns (zenith list, azimuth list)."""
+    az = unwrap_deg(azimuth)
+    if mode == "online":
+        z_s = online(frames, zenith, weights, **kw)
+        a_s = online(frames, list(az), weights, **kw)
+    elif mode == "two_pass":
+        z_s = two_pass(frames, zenith, weights, degree=degree)
+        a_s = two_pass(frames, list(az), weights, degree=degree)
+    else:
+        raise ValueError(f"smoothing mode {mode!r} is not one of online, two_pass")
+    a_s = [None if a is None else a % 360.0 for a in a_s]
+    return z_s, a_s

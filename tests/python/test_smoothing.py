@@ -1,0 +1,70 @@
+import math
+
+import numpy as np
+import pytest
+
+from core import smoothing
+
+
+def noisy_path(n=120, seed=0, drop=()):
+    rng = np.random.default_rng(seed)
+    frames = list(range(1, n + 1))
+    t = np.linspace(0, 1, n)
+    zen = 60 - 20 * t + 4 * t * t              # the Sun climbing, slowly bending
+    azi = (350 + 40 * t) % 360                  # crosses north
+    zn = list(zen + rng.normal(0, 0.6, n))
+    an = list((azi + rng.normal(0, 0.6, n)) % 360)
+    for k in drop:
+        zn[k] = an[k] = None
+    return frames, zen, azi, zn, an
+
+
+def az_err(a, b):
+    return np.abs((np.asarray(a) - np.asarray(b) + 180) % 360 - 180)
+
+
+def test_two_pass_recovers_a_known_path_from_noisy_samples():
+    frames, zen, azi, zn, an = noisy_path(drop=(10, 11, 50))
+    z, a = smoothing.smooth_angles(frames, zn, an, [1.0] * len(frames), "two_pass", degree=3)
+    # Noise 0.6 deg on 120 samples: a cubic's error is ~0.1 deg on average and
+    # ~0.22 deg (1 sigma) at the clip's ends.
+    assert np.mean(np.abs(np.array(z) - zen)) < 0.2 and np.mean(az_err(a, azi)) < 0.2
+    assert np.max(np.abs(np.array(z) - zen)) < 0.7 and np.max(az_err(a, azi)) < 0.7
+    assert all(v is not None for v in z)          # dropped frames are filled
+
+
+def test_linear_two_pass_is_the_thesis_line():
+    frames = list(range(10))
+    z = smoothing.two_pass(frames, [2.0 * f + 1 for f in frames], degree=1)
+    assert np.allclose(z, [2.0 * f + 1 for f in frames])
+
+
+def test_two_pass_ignores_outliers_and_zero_confidence():
+    frames, zen, azi, zn, an = noisy_path(seed=1)
+    zn[30], zn[31] = 10.0, 85.0                   # gross tracking failures
+    w = [1.0] * len(frames)
+    w[60] = 0.0
+    zn[60] = 0.0
+    z = smoothing.two_pass(frames, zn, w, degree=3)
+    assert np.max(np.abs(np.array(z) - zen)) < 0.5
+
+
+def test_online_is_causal_and_follows_the_path():
+    frames, zen, azi, zn, an = noisy_path(seed=2)
+    z = smoothing.online(frames, zn)
+    # Causal: changing a later sample does not change earlier outputs.
+    zn2 = list(zn)
+    zn2[100] = 0.0
+    assert smoothing.online(frames, zn2)[:100] == z[:100]
+    err = np.abs(np.array(z[20:]) - zen[20:])
+    assert err.mean() < 0.5 and err.max() < 1.5
+
+
+def test_nothing_estimated_gives_none():
+    assert smoothing.two_pass([1, 2, 3], [None, None, None]) == [None] * 3
+    assert smoothing.online([1, 2, 3], [None, None, None]) == [None] * 3
+
+
+def test_unknown_mode_is_an_error():
+    with pytest.raises(ValueError, match="smoothing mode"):
+        smoothing.smooth_angles([1], [1.0], [1.0], [1.0], "spline")
