@@ -389,12 +389,49 @@ void Scene::Occluded(int64_t n, const float* origins, const float* directions,
 void Scene::OccludedToward(int64_t n, const float* origins,
                            const Eigen::Vector3f& direction, float t_near,
                            float t_far, uint8_t* occluded) const {
+  Require(n >= 0, "n must be >= 0");
+  Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
   Require(direction.allFinite() && direction.norm() > 0,
           "direction must be finite and non-zero");
   const Eigen::Vector3f d = direction.normalized();
-  OccludedBatch(
-      impl_->scene, n, origins, [&](int64_t) { return d.data(); }, t_near,
-      t_far, true, occluded);
+  RTCScene scene = impl_->scene;
+  // One direction and neighbouring origins: packets of 16 rays traverse the
+  // BVH together, several times faster than single rays here.
+  constexpr int kPacket = 16;
+  tbb::parallel_for(
+      tbb::blocked_range<int64_t>(0, (n + kPacket - 1) / kPacket, 64),
+      [&](const tbb::blocked_range<int64_t>& r) {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        alignas(64) RTCRay16 rays;
+        alignas(64) int valid[kPacket];
+        for (int64_t p = r.begin(); p < r.end(); ++p) {
+          const int64_t base = p * kPacket;
+          for (int k = 0; k < kPacket; ++k) {
+            const int64_t i = base + k;
+            const float* o = i < n ? origins + 3 * i : nullptr;
+            float norm;
+            valid[k] = (o && ValidRay(o, d.data(), &norm)) ? -1 : 0;
+            rays.org_x[k] = valid[k] ? o[0] : 0.f;
+            rays.org_y[k] = valid[k] ? o[1] : 0.f;
+            rays.org_z[k] = valid[k] ? o[2] : 0.f;
+            rays.dir_x[k] = d.x();
+            rays.dir_y[k] = d.y();
+            rays.dir_z[k] = d.z();
+            rays.tnear[k] = t_near;
+            rays.tfar[k] = t_far;
+            rays.time[k] = 0.f;
+            rays.mask[k] = 0xFFFFFFFFu;
+            rays.id[k] = 0;
+            rays.flags[k] = 0;
+          }
+          rtcOccluded16(valid, scene, &ctx, &rays);
+          for (int k = 0; k < kPacket && base + k < n; ++k) {
+            occluded[base + k] = (valid[k] && rays.tfar[k] < 0) ? 1 : 0;
+          }
+        }
+      });
 }
 
 }  // namespace sunlapse

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 namespace sunlapse {
@@ -107,6 +108,30 @@ TEST(Scene, OcclusionTowardTheSunSeesTheBoxShadow) {
   // A short ray stops before the box.
   scene.Occluded(1, origins, dirs, 1e-3f, 0.5f, occluded);
   EXPECT_EQ(occluded[0], 0);
+}
+
+TEST(Scene, OccludedTowardAgreesWithSingleRaysOnManyRays) {
+  const Scene scene = BoxOnPlane();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-4, 4);
+  const int n = 5003;  // not a multiple of the packet size
+  std::vector<float> origins(3 * n), dirs(3 * n);
+  const Eigen::Vector3f d = Eigen::Vector3f(0.4f, -0.3f, 0.6f).normalized();
+  for (int i = 0; i < n; ++i) {
+    origins[3 * i] = u(rng);
+    origins[3 * i + 1] = u(rng);
+    origins[3 * i + 2] = 0.01f;
+    for (int k = 0; k < 3; ++k) dirs[3 * i + k] = d[k];
+  }
+  std::vector<uint8_t> a(n), b(n);
+  scene.Occluded(n, origins.data(), dirs.data(), 0.f, INFINITY, a.data());
+  scene.OccludedToward(n, origins.data(), d, 0.f, INFINITY, b.data());
+  int shadowed = 0;
+  for (int i = 0; i < n; ++i) {
+    ASSERT_EQ(a[i], b[i]) << "ray " << i;
+    shadowed += a[i];
+  }
+  EXPECT_GT(shadowed, 100);
 }
 
 TEST(Scene, NonFiniteRaysAreMissesNotCrashes) {

@@ -32,8 +32,9 @@ struct ShadowTrackerOptions {
   std::vector<int32_t> ground_object_ids;
   // Half-width of the band around predicted shadow boundaries (pixels).
   int band_radius_px = 4;
-  // At most this many band pixels are used per frame (a regular subsample).
-  int max_band_pixels = 6000;
+  // At most this many band pixels are used per frame (a regular subsample):
+  // the cost per frame is proportional; 1500 keeps hundreds on each boundary.
+  int max_band_pixels = 1500;
   // First search step around the predicted Sun, and the final step (deg).
   double search_step_deg = 0.5;
   double tolerance_deg = 0.01;
