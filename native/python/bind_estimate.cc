@@ -86,7 +86,7 @@ void BindEstimate(py::module_& m) {
            }),
            py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
            py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
-           py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 1500,
+           py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 800,
            py::arg("min_contrast") = 0.5, py::arg("subsamples") = 2,
            py::arg("normalize_albedo") = true,
            py::keep_alive<1, 2>(), py::keep_alive<1, 3>())

@@ -62,7 +62,13 @@ struct ShadowTracker::Impl {
   Eigen::Vector3d sun, sun_before;     // last two accepted Suns
   bool have_velocity = false;
   int lost = 0;
+  double last_correction_deg = 0.5;    // |found - predicted| on the last frame
   std::vector<int> band;               // ground indices near shadow boundaries
+  std::vector<int> boundary;           // ground indices on a lit/shadow boundary
+  int band_core = 0;                   // band[0, band_core) lie by a boundary
+  // Scratch per ground pixel, valid where its tag equals the current epoch.
+  std::vector<int> tag, slot;
+  int epoch = 0;
 
   // Work buffers: band_origin/ray_x/band_normal per sub-pixel ray,
   // band_x/band_y per band pixel.
@@ -96,6 +102,8 @@ struct ShadowTracker::Impl {
       origin.insert(origin.end(), {p.x(), p.y(), p.z()});
       normal.push_back(hits.normal(i));
     }
+    tag.assign(pixel.size(), 0);
+    slot.assign(pixel.size(), 0);
     // How the ground point moves per pixel, from neighbouring ground pixels.
     dpdx.assign(pixel.size(), Eigen::Vector3f::Zero());
     dpdy.assign(pixel.size(), Eigen::Vector3f::Zero());
@@ -134,53 +142,62 @@ struct ShadowTracker::Impl {
     return occ;
   }
 
-  // Band: ground pixels within band_radius of a lit/shadow boundary toward
-  // d, searched among `candidates` (ground indices).
-  std::vector<int> BandAround(const std::vector<int>& candidates, const Eigen::Vector3f& d) {
-    if (candidates.empty()) return {};
-    const std::vector<uint8_t> lit = LitOf(candidates, d);
-    cv::Rect roi;
-    for (size_t i = 0; i < candidates.size(); ++i) {
-      roi |= cv::Rect(pixel[candidates[i]], cv::Size(1, 1));
-    }
-    cv::Mat1b state(roi.size(), 255);  // 255 unknown, 0 shadow, 1 lit
-    for (size_t i = 0; i < candidates.size(); ++i) {
-      state(pixel[candidates[i]] - roi.tl()) = lit[i];
-    }
-    cv::Mat1b boundary(roi.size(), 0);
-    for (int y = 0; y < state.rows; ++y) {
-      for (int x = 0; x < state.cols; ++x) {
-        const uint8_t s = state(y, x);
-        if (s == 255) continue;
-        const bool edge = (x + 1 < state.cols && state(y, x + 1) != 255 && state(y, x + 1) != s) ||
-                          (y + 1 < state.rows && state(y + 1, x) != 255 && state(y + 1, x) != s);
-        if (edge) {
-          boundary(y, x) = 255;
-          if (x + 1 < state.cols && state(y, x + 1) != s) boundary(y, x + 1) = 255;
-          if (y + 1 < state.rows && state(y + 1, x) != s) boundary(y + 1, x) = 255;
+  // Ground pixels within a (2r+1)^2 window of any of `centers`, each once.
+  // Cost grows with the number of centres, not with the frame's size.
+  std::vector<int> Window(const std::vector<int>& centers, int r) {
+    ++epoch;
+    std::vector<int> out;
+    for (int c : centers) {
+      const cv::Point p = pixel[c];
+      for (int y = std::max(0, p.y - r); y <= std::min(H - 1, p.y + r); ++y) {
+        const int* row = ground_index[y];
+        for (int x = std::max(0, p.x - r); x <= std::min(W - 1, p.x + r); ++x) {
+          const int g = row[x];
+          if (g >= 0 && tag[g] != epoch) {
+            tag[g] = epoch;
+            out.push_back(g);
+          }
         }
       }
     }
-    return PixelsNear(boundary, roi, o.band_radius_px);
+    return out;
   }
 
-  // Ground indices within `radius` of the set pixels of `mask` (placed at roi).
-  std::vector<int> PixelsNear(const cv::Mat1b& mask, const cv::Rect& roi, int radius) {
-    const cv::Rect grown = (roi + cv::Size(2 * radius, 2 * radius) - cv::Point(radius, radius)) &
-                           cv::Rect(0, 0, W, H);
-    cv::Mat1b big(grown.size(), 0);
-    mask.copyTo(big(cv::Rect(roi.tl() - grown.tl(), roi.size())));
-    cv::dilate(big, big, cv::getStructuringElement(cv::MORPH_ELLIPSE,
-                                                   cv::Size(2 * radius + 1, 2 * radius + 1)));
-    std::vector<int> out;
-    for (int y = 0; y < big.rows; ++y) {
-      for (int x = 0; x < big.cols; ++x) {
-        if (!big(y, x)) continue;
-        const int g = ground_index(y + grown.y, x + grown.x);
-        if (g >= 0) out.push_back(g);
+  // Lit/shadow boundaries toward d among `candidates`; sets `boundary` and
+  // returns the band: ground pixels within band_radius of a boundary.
+  std::vector<int> BandAround(const std::vector<int>& candidates, const Eigen::Vector3f& d) {
+    boundary.clear();
+    if (candidates.empty()) return {};
+    const std::vector<uint8_t> lit = LitOf(candidates, d);
+    ++epoch;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      tag[candidates[i]] = epoch;
+      slot[candidates[i]] = static_cast<int>(i);
+    }
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      const cv::Point p = pixel[candidates[i]];
+      const cv::Point next[2] = {{p.x + 1, p.y}, {p.x, p.y + 1}};
+      for (const cv::Point& q : next) {
+        if (q.x >= W || q.y >= H) continue;
+        const int g = ground_index(q);
+        if (g < 0 || tag[g] != epoch || lit[slot[g]] == lit[i]) continue;
+        boundary.push_back(candidates[i]);
+        boundary.push_back(g);
       }
     }
-    return out;
+    // The pixels next to a boundary carry the direction: they come first in
+    // the band, so that subsampling (LoadBand) thins only the outer ring,
+    // which serves the photometric fit.
+    std::vector<int> core = Window(boundary, 1);
+    const int core_epoch = epoch;
+    std::vector<int> band = Window(boundary, o.band_radius_px);
+    band_core = static_cast<int>(core.size());
+    for (int g : core) tag[g] = core_epoch;  // mark the core again
+    std::vector<int> ordered = core;
+    for (int g : band) {
+      if (tag[g] != core_epoch) ordered.push_back(g);
+    }
+    return ordered;
   }
 
   std::vector<int> AllGround(int stride) const {
@@ -194,13 +211,20 @@ struct ShadowTracker::Impl {
   // Loads the band's pixels (subsampled) and the frame's values into buffers,
   // with subsamples^2 rays per pixel spread over the pixel's footprint.
   void LoadBand(const cv::Mat& frame) {
-    const int stride = std::max<int>(1, static_cast<int>(band.size() / o.max_band_pixels) + 1);
+    // All of the core (up to the budget), then every stride-th outer pixel.
+    const int n = static_cast<int>(band.size());
+    const int core = std::min(band_core, o.max_band_pixels);
+    const int room = std::max(o.max_band_pixels - core, o.max_band_pixels / 4);
+    const int core_stride = std::max(1, band_core / std::max(1, core));
+    const int outer_stride = std::max(1, (n - band_core) / room + 1);
+    std::vector<int> picked;
+    for (int i = 0; i < band_core; i += core_stride) picked.push_back(band[i]);
+    for (int i = band_core; i < n; i += outer_stride) picked.push_back(band[i]);
     const int k = o.subsamples;
     band_origin.clear();
     band_normal.clear();
     band_y.clear();
-    for (size_t i = 0; i < band.size(); i += stride) {
-      const int g = band[i];
+    for (const int g : picked) {
       const Eigen::Vector3f p(&origin[3 * g]);
       for (int sy = 0; sy < k; ++sy) {
         for (int sx = 0; sx < k; ++sx) {
@@ -294,16 +318,23 @@ struct ShadowTracker::Impl {
     }
   }
 
-  // The frame cannot show shadows: why, or empty if it can.
+  // The frame cannot show shadows: why, or empty if it can. A sparse grid of
+  // pixels tells a black or overexposed frame as well as all of them do.
   std::string Unusable(const cv::Mat& frame) const {
     if (frame.empty()) return "frame cannot be decoded";
     if (frame.cols != W || frame.rows != H) return "frame has another size than the clip";
-    const cv::Mat content = frame.rowRange(o.ignore_top_rows, H - o.ignore_bottom_rows);
-    double lo, hi;
-    cv::minMaxLoc(content, &lo, &hi);
-    if (hi < 0.01) return "frame is black";
-    const double clipped = cv::countNonZero(content >= 0.98f) / static_cast<double>(content.total());
-    if (clipped > 0.5) return "frame is overexposed";
+    const int step = std::max(1, std::min(W, H) / 120);
+    float hi = 0;
+    int clipped = 0, count = 0;
+    for (int y = o.ignore_top_rows; y < H - o.ignore_bottom_rows; y += step) {
+      const float* row = frame.ptr<float>(y);
+      for (int x = 0; x < W; x += step, ++count) {
+        hi = std::max(hi, row[x]);
+        clipped += row[x] >= 0.98f;
+      }
+    }
+    if (hi < 0.01f) return "frame is black";
+    if (clipped > count / 2) return "frame is overexposed";
     return {};
   }
 };
@@ -399,16 +430,11 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
   const Eigen::Vector3f pf = pred.cast<float>();
   // Band near the predicted boundaries: found among the last band's
   // neighbourhood, or on the whole ground after a loss.
-  std::vector<int> candidates;
-  if (!s.band.empty() && s.lost == 0) {
-    cv::Rect roi;
-    for (int g : s.band) roi |= cv::Rect(s.pixel[g], cv::Size(1, 1));
-    cv::Mat1b mask(roi.size(), uint8_t(0));
-    for (int g : s.band) mask(s.pixel[g] - roi.tl()) = 255;
-    candidates = s.PixelsNear(mask, roi, 2 * s.o.band_radius_px);
-  } else {
-    candidates = s.AllGround(1);
-  }
+  // Candidates near the last boundaries (they move a few pixels at most per
+  // frame), or the whole ground after a loss.
+  const std::vector<int> candidates = (!s.boundary.empty() && s.lost == 0)
+                                          ? s.Window(s.boundary, s.o.band_radius_px + 2)
+                                          : s.AllGround(1);
   std::vector<int> band = s.BandAround(candidates, pf);
   if (band.empty() && s.lost == 0) band = s.BandAround(s.AllGround(1), pf);
   if (band.empty()) {
@@ -421,7 +447,12 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
   std::vector<float> sorted = s.band_y;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double scale = std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
-  const double step = s.o.search_step_deg * (s.lost > 0 ? 4.0 : 1.0);
+  // The search starts at twice the last frame's correction of the prediction
+  // (a steady Sun needs few evaluations), at most search_step_deg.
+  const double step = s.lost > 0 ? 4.0 * s.o.search_step_deg
+                                 : std::clamp(2.0 * s.last_correction_deg,
+                                              std::max(0.05, 2 * s.o.tolerance_deg),
+                                              s.o.search_step_deg);
   const Eigen::Vector3d found = s.Search(pred, step, scale);
   s.Cost(found, scale);  // leaves the fit of the found Sun in s.fit
   const double a = s.fit.a[0], b = s.fit.b[0];
@@ -440,6 +471,7 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;
+  s.last_correction_deg = std::atan2(found.cross(pred).norm(), found.dot(pred)) / kDeg;
   s.sun = found;
   s.lost = 0;
   return finish(found);
