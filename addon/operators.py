@@ -1,10 +1,15 @@
 """Operators. They call bridge/core and _native; errors go to self.report."""
 
+import os
+import threading
 import time
 
 import bpy
+from bpy.props import EnumProperty, StringProperty
+from bpy_extras.io_utils import ExportHelper
 
-from . import bridge, lamp, native_loader, pipeline
+from . import ar, bridge, lamp, native_loader, pipeline, results
+from .core import trackfile
 
 
 def ground_names(settings):
@@ -101,5 +106,240 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun)
+def prepare_run(context, settings=None, collection=None, ground=None, frames=None,
+                method=None, smoothing=None):
+    """Everything a run needs, gathered on the main thread (bpy reads only).
+    Returns (native scene, native camera, clip info, frame numbers, options)."""
+    settings = settings or context.scene.sunlapse
+    native_loader.require()
+    model, cam, clip = gather_all(context, settings, collection=collection)
+    names = ground or ground_names(settings) or bridge.guess_ground(model)
+    missing = [g for g in names if g not in model.names]
+    if missing:
+        raise bridge.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")
+    ids = model.ids_of(names)
+    if not ids:
+        raise bridge.SceneError("no ground found: name the object(s) the shadows fall on "
+                                "(Ground in the panel)")
+    if frames is None:
+        frames = (clip.frame_start, clip.frame_end)
+        if settings.use_frame_range:
+            frames = (max(clip.frame_start, settings.frame_start),
+                      min(clip.frame_end, settings.frame_end))
+    if frames[0] > frames[1]:
+        raise bridge.SceneError(f"empty frame range {frames[0]}-{frames[1]}")
+    options = pipeline.RunOptions(
+        method=method or settings.method, smoothing=smoothing or settings.smoothing,
+        ignore_top_rows=settings.ignore_top_rows,
+        north_offset_deg=bridge.scene_north_offset_deg(context), ground_object_ids=ids)
+    for w in cam.warnings:
+        print(f"sunlapse: warning: {w}")
+    scene_n = bridge.build_scene(model)
+    camera_n = bridge.build_camera(cam)
+    track_extra = {"ground": names, "model_objects": model.names}
+    return scene_n, camera_n, clip, list(range(frames[0], frames[1] + 1)), options, track_extra
+
+
+def finish_run(context, track, clip, extra):
+    """Main thread: keeps the result in the .blend and summarises it."""
+    track.clip = clip.filepath
+    track.method["options"].update(extra)
+    results.store_track(track)
+    done = len(results.estimated_frames(track))
+    raw = sum(1 for f in track.frames if f.raw_zenith_deg is not None)
+    msg = (f"Sun estimated on {done}/{len(track.frames)} frames "
+           f"({raw} measured, the rest from smoothing)")
+    context.scene.sunlapse.last_report = msg
+    return msg
+
+
+class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
+    """Estimate the Sun on every frame of the clip: initial Sun on the first
+    frame, shadow tracking on the rest, then smoothing. Esc cancels"""
+    bl_idname = "clip.sunlapse_estimate"
+    bl_label = "Estimate Sun"
+    bl_options = {"REGISTER", "UNDO"}
+
+    _timer = None
+
+    def _prepare(self, context):
+        try:
+            self._job = prepare_run(context)
+        except (bridge.SceneError, RuntimeError, ValueError) as e:
+            self.report({"ERROR"}, str(e))
+            return False
+        return True
+
+    def execute(self, context):  # synchronous: blender -b, scripts
+        if not self._prepare(context):
+            return {"CANCELLED"}
+        scene_n, camera_n, clip, frames, options, extra = self._job
+        try:
+            track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames, options)
+        except (pipeline.PipelineError, ValueError) as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, finish_run(context, track, clip, extra))
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        if not self._prepare(context):
+            return {"CANCELLED"}
+        self._fraction = 0.0
+        self._cancel = False
+        self._result = None
+        self._error = None
+
+        def work():
+            scene_n, camera_n, clip, frames, options, _ = self._job
+
+            def progress(fraction):
+                self._fraction = fraction
+                return not self._cancel
+            try:
+                self._result = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start,
+                                            frames, options, progress)
+            except Exception as e:  # reported on the main thread
+                self._error = e
+
+        self._thread = threading.Thread(target=work, name="sunlapse-estimate", daemon=True)
+        self._thread.start()
+        wm = context.window_manager
+        wm.progress_begin(0, 100)
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context):
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace:
+            context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS":
+            self._cancel = True
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"} if event.type == "ESC" else {"PASS_THROUGH"}
+        pct = int(100 * self._fraction)
+        context.window_manager.progress_update(pct)
+        if context.workspace:
+            context.workspace.status_text_set(
+                f"sunlapse: estimating the Sun {pct}%" + (" (cancelling)" if self._cancel
+                                                         else " - Esc to cancel"))
+        if self._thread.is_alive():
+            return {"PASS_THROUGH"}
+        self._end(context)
+        if self._cancel or (isinstance(self._error, pipeline.PipelineError)
+                            and str(self._error) == "cancelled"):
+            self.report({"INFO"}, "Estimate cancelled; nothing was changed")
+            return {"CANCELLED"}
+        if self._error is not None:
+            self.report({"ERROR"}, f"Estimate failed: {self._error}")
+            return {"CANCELLED"}
+        _, _, clip, _, _, extra = self._job
+        self.report({"INFO"}, finish_run(context, self._result, clip, extra))
+        return {"FINISHED"}
+
+    def cancel(self, context):  # Blender closes the window / file
+        self._cancel = True
+        self._end(context)
+
+
+class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
+    """Keyframe the Sun lamp (created if needed) on every estimated frame,
+    in its own rotation mode; a second run replaces its own keys only"""
+    bl_idname = "clip.sunlapse_apply_lamp"
+    bl_label = "Apply to Sun Lamp"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return results.TEXT_NAME in bpy.data.texts
+
+    def execute(self, context):
+        settings = context.scene.sunlapse
+        track = results.load_track()
+        if track is None:
+            self.report({"ERROR"}, "No Sun track in this file: run Estimate Sun first")
+            return {"CANCELLED"}
+        try:
+            sun = results.apply_track(context, track, settings.sun_lamp, settings.sync_sky)
+        except ValueError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        settings.sun_lamp = sun
+        n = len(results.estimated_frames(track))
+        self.report({"INFO"}, f"Keyed '{sun.name}' ({sun.rotation_mode}) on {n} frames")
+        return {"FINISHED"}
+
+
+class CLIP_OT_sunlapse_export(bpy.types.Operator, ExportHelper):
+    """Export the Sun track (sunlapse JSON or CSV) or the animated Sun lamp (glTF)"""
+    bl_idname = "clip.sunlapse_export"
+    bl_label = "Export Sun"
+    bl_options = {"REGISTER"}
+
+    filename_ext = ".sun.json"
+    filter_glob: StringProperty(default="*.json;*.csv;*.glb", options={"HIDDEN"})
+    format: EnumProperty(
+        name="Format",
+        items=[("JSON", "Track (.sun.json)", "sunlapse track file"),
+               ("CSV", "CSV (.csv)", "frame, zenith_deg, azimuth_deg, confidence"),
+               ("GLB", "Sun lamp (.glb)", "the animated Sun lamp as glTF binary")],
+        default="JSON")
+
+    def check(self, context):
+        self.filename_ext = {"JSON": ".sun.json", "CSV": ".csv", "GLB": ".glb"}[self.format]
+        return super().check(context)
+
+    def execute(self, context):
+        track = results.load_track()
+        if track is None:
+            self.report({"ERROR"}, "No Sun track in this file: run Estimate Sun first")
+            return {"CANCELLED"}
+        path = bpy.path.abspath(self.filepath)
+        try:
+            if self.format == "JSON":
+                trackfile.write_track(path, track)
+            elif self.format == "CSV":
+                results.export_csv(track, path)
+            else:
+                results.export_gltf(context, context.scene.sunlapse.sun_lamp, path)
+        except (OSError, ValueError, RuntimeError) as e:
+            self.report({"ERROR"}, f"Export failed: {e}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Wrote {path}")
+        return {"FINISHED"}
+
+
+class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
+    """Set up an AR render: Cycles, the model as shadow catcher, transparent
+    film, the render composited over the clip, the clip as camera background"""
+    bl_idname = "clip.sunlapse_setup_ar"
+    bl_label = "Set Up AR Render"
+    bl_options = {"REGISTER", "UNDO"}
+
+    add_sample_object: bpy.props.BoolProperty(
+        name="Add Sample Object", default=True,
+        description="Drop a sample virtual object on the ground in view")
+
+    def execute(self, context):
+        try:
+            note = ar.setup(context, add_sample_object=self.add_sample_object)
+        except (bridge.SceneError, ValueError) as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, note)
+        return {"FINISHED"}
+
+
+classes = (CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun,
+           CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export,
+           CLIP_OT_sunlapse_setup_ar)
 register, unregister = bpy.utils.register_classes_factory(classes)

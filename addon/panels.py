@@ -19,13 +19,45 @@ def draw_sun_panel(layout, context):
     col.prop(settings, "model_collection")
     col.prop(settings, "camera")
     col.prop(settings, "ground_objects")
-    col.prop(settings, "sun_lamp")
     col.prop(settings, "method")
+    col.prop(settings, "smoothing")
     col.prop(settings, "ignore_top_rows")
+    row = col.row(align=True)
+    row.prop(settings, "use_frame_range", text="")
+    sub = row.row(align=True)
+    sub.active = settings.use_frame_range
+    sub.prop(settings, "frame_start")
+    sub.prop(settings, "frame_end")
     layout.operator("clip.sunlapse_check_scene", icon="CHECKMARK")
+    layout.operator("clip.sunlapse_estimate", icon="LIGHT_SUN")
     layout.operator("clip.sunlapse_initial_sun", icon="LIGHT_SUN")
+    box = layout.box()
+    box.prop(settings, "sun_lamp")
+    box.prop(settings, "sync_sky")
+    box.operator("clip.sunlapse_apply_lamp", icon="KEYINGSET")
+    box.operator("clip.sunlapse_setup_ar", icon="RENDER_ANIMATION")
+    box.operator("clip.sunlapse_export", icon="EXPORT")
     if settings.last_report:
         layout.label(text=settings.last_report[:120])
+    draw_track_summary(layout, context)
+
+
+def draw_track_summary(layout, context):
+    """The stored track on the current frame: angles, confidence, or why not."""
+    from . import results
+    track = results.load_track()
+    if track is None:
+        return
+    est = track.frame(context.scene.frame_current)
+    col = layout.column(align=True)
+    if est is None:
+        col.label(text="Current frame is outside the track")
+        return
+    if est.has_estimate:
+        col.label(text=f"Zenith {est.zenith_deg:.2f}°  Azimuth {est.azimuth_deg:.2f}°")
+        col.label(text=f"Confidence {est.confidence:.2f}")
+    if est.reason:
+        col.label(text=est.reason[:80], icon="INFO")
 
 
 class CLIP_PT_sunlapse(bpy.types.Panel):

@@ -1,7 +1,7 @@
 """Properties of sunlapse, kept apart from the UI."""
 
 import bpy
-from bpy.props import EnumProperty, IntProperty, PointerProperty, StringProperty
+from bpy.props import BoolProperty, EnumProperty, IntProperty, PointerProperty, StringProperty
 
 
 def _is_camera(self, obj):
@@ -36,6 +36,19 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         name="Ignore Top Rows", min=0, default=0,
         description="Rows at the top of the frame that are not scene content "
                     "(burned-in time stamps, banners)")
+    smoothing: EnumProperty(
+        name="Smoothing",
+        items=[("two_pass", "Two-Pass", "Fit the whole clip (best for renders)"),
+               ("online", "Online", "Causal smoothing, as if the clip were playing")],
+        default="two_pass")
+    use_frame_range: BoolProperty(
+        name="Frame Range", default=False,
+        description="Estimate only these frames (default: the whole clip)")
+    frame_start: IntProperty(name="Start", default=1)
+    frame_end: IntProperty(name="End", default=250)
+    sync_sky: BoolProperty(
+        name="Sync Sky", default=True,
+        description="Also keyframe the world's Nishita Sky Texture from the track")
     last_report: StringProperty(name="Last check", default="")
 
 

@@ -16,7 +16,6 @@ import argparse
 import importlib.util
 import os
 import sys
-import time
 
 EXIT_USAGE = 2
 EXIT_SCENE = 3
@@ -96,44 +95,27 @@ def main(argv):
     try:
         clip = bridge.gather_clip(context)
         frames = parse_frames(args.frames, clip)
-        movieclip = bridge.active_movieclip(context)
-        cam = bridge.gather_camera(context, None, clip, movieclip)
-        model = bridge.gather_model(context, collection)
-        missing = [g for g in args.ground if g not in model.names]
-        if missing:
-            raise bridge.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")
-        ground = args.ground or bridge.guess_ground(model)
-        t0 = time.perf_counter()
-        native_scene = bridge.build_scene(model)
-        native_camera = bridge.build_camera(cam)
-        t_bvh = time.perf_counter() - t0
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))
     except ValueError as e:
         fail(EXIT_USAGE, str(e))
-    for w in cam.warnings:
-        print(f"sunlapse: warning: {w}")
 
-    print(f"sunlapse: model {model.num_triangles} triangles, {len(model.names)} "
-          f"objects, BVH {t_bvh:.3f} s; camera '{cam.name}'; clip '{clip.name}' "
-          f"{clip.width}x{clip.height} frames {frames[0]}:{frames[1]}; ground: "
-          f"{', '.join(ground) or 'none found'}")
-
-    from sunlapse import pipeline
+    from sunlapse import ar, operators, pipeline, results
     if args.smoothing == "physical":
         fail(EXIT_USAGE, "--smoothing physical is not implemented yet; use online or two_pass")
-    options = pipeline.RunOptions(method=args.method, smoothing=args.smoothing,
-                                  north_offset_deg=bridge.scene_north_offset_deg(context),
-                                  ground_object_ids=model.ids_of(ground))
-    frame_numbers = list(range(frames[0], frames[1] + 1))
+    if not hasattr(bpy.types.Scene, "sunlapse"):
+        sunlapse.register()  # properties and operators, as in the UI
     try:
-        track = pipeline.run(native_scene, native_camera, clip.filepath, clip.frame_start,
-                             frame_numbers, options)
+        scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
+            context, collection=collection, ground=args.ground, frames=frames,
+            method=args.method, smoothing=args.smoothing)
+        track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers, options)
+    except bridge.SceneError as e:
+        fail(EXIT_SCENE, str(e))
     except pipeline.PipelineError as e:
         fail(EXIT_SCENE, str(e))
-    track.clip = clip.filepath
-    track.method["options"].update({"method": args.method, "frames": list(frames),
-                                    "ground": ground})
+    operators.finish_run(context, track, clip, dict(extra, method=args.method,
+                                                     frames=list(frames)))
     trackfile.write_track(args.out, track)
     init = track.initial
     if init:
@@ -143,10 +125,24 @@ def main(argv):
     else:
         print(f"sunlapse: warning: {track.frames[0].reason}")
     done = sum(1 for f in track.frames if f.has_estimate)
-    print(f"sunlapse: {done}/{len(track.frames)} frames estimated; wrote {args.out}")
-    for flag, value in (("--apply-lamp", args.apply_lamp), ("--render-ar", args.render_ar)):
-        if value:
-            print(f"sunlapse: warning: {flag} is not implemented yet; ignored")
+    timing = track.extra.get("timing", {})
+    print(f"sunlapse: {done}/{len(track.frames)} frames estimated "
+          f"(tracking {timing.get('tracking_ms_per_frame', 0):.1f} ms/frame); wrote {args.out}")
+    if args.apply_lamp or args.render_ar:
+        try:
+            sun = results.apply_track(context, track, context.scene.sunlapse.sun_lamp)
+        except ValueError as e:
+            fail(EXIT_SCENE, str(e))
+        context.scene.sunlapse.sun_lamp = sun
+        print(f"sunlapse: keyed Sun lamp '{sun.name}' on {done} frames")
+    if args.render_ar:
+        try:
+            print(f"sunlapse: {ar.setup(context)}")
+        except (bridge.SceneError, ValueError) as e:
+            fail(EXIT_SCENE, str(e))
+        os.makedirs(args.render_ar, exist_ok=True)
+        ar.render_frames(context, os.path.abspath(args.render_ar), frames)
+        print(f"sunlapse: rendered AR frames {frames[0]}-{frames[1]} to {args.render_ar}")
     if args.save:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save), copy=True)
         print(f"sunlapse: saved {args.save}")
