@@ -25,13 +25,23 @@ import bpy  # noqa: E402
 from . import native_loader, operators, panels, properties  # noqa: E402
 
 _modules = (properties, operators, panels)
+_cli_handle = None
 
 
 def register():
+    global _cli_handle
     for m in _modules:
         m.register()
+    # Blender 4.2+: `blender -c sunlapse SCENE.blend --out TRACK.json ...`
+    if bpy.app.version >= (4, 2, 0) and hasattr(bpy.utils, "register_cli_command"):
+        from . import cli
+        _cli_handle = bpy.utils.register_cli_command("sunlapse", cli.command)
 
 
 def unregister():
+    global _cli_handle
+    if _cli_handle is not None:
+        bpy.utils.unregister_cli_command(_cli_handle)
+        _cli_handle = None
     for m in reversed(_modules):
         m.unregister()

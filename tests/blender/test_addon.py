@@ -116,3 +116,10 @@ def test_scripted_run_rejects_bad_flags(empty_scene, tmp_path):
     assert proc.returncode != 0 and "--frames" in error_lines(proc)[0]
     proc = run_estimate(blend, str(tmp_path / "o.json"), "--collection", "Nope")
     assert proc.returncode != 0 and "Nope" in error_lines(proc)[0]
+
+
+def test_scripted_run_reports_unknown_flags_in_one_line(empty_scene, tmp_path):
+    blend = make_blend(tmp_path)
+    proc = run_estimate(blend, str(tmp_path / "o.json"), "--nonsense")
+    assert proc.returncode == 2
+    assert "unrecognized arguments" in error_lines(proc)[0]
