@@ -43,6 +43,9 @@ def parse_args(argv):
                    help="keyframe a Sun lamp from the track")
     p.add_argument("--save", help="save the .blend here afterwards")
     p.add_argument("--render-ar", metavar="DIR", help="render the AR composite here")
+    p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
+                   help="start from this Sun on the first frame instead of estimating it "
+                        "(degrees, azimuth as in the track file); for measuring the tracker")
     return p.parse_args(argv)
 
 
@@ -103,6 +106,11 @@ def _run(argv):
         scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
             context, collection=collection, ground=args.ground, frames=frames,
             method=args.method, smoothing=args.smoothing)
+        if args.initial_sun:
+            z, a = args.initial_sun
+            if not (0 <= z < 90):
+                fail(EXIT_USAGE, f"--initial-sun zenith {z} is not in [0, 90)")
+            options.initial_sun = (z, a)
         track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers, options)
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))

@@ -34,6 +34,9 @@ class RunOptions:
     ignore_top_rows: int = 0
     north_offset_deg: float = 0.0      # scene +Y from north (Sun Position add-on)
     ground_object_ids: List[int] = field(default_factory=list)
+    # Given Sun on the first frame (zenith, azimuth as in the track file):
+    # skips the initial estimate, to measure the tracker alone.
+    initial_sun: Optional[tuple] = None
 
 
 def _check_progress(progress, fraction):
@@ -84,6 +87,18 @@ def estimate_initial(scene, camera, bgr, options: RunOptions, progress=None) -> 
     return init
 
 
+def _given_initial(zenith_deg, azimuth_deg, north_offset_deg):
+    """An initial result dict for a Sun given by the user (world frame inside)."""
+    import math
+    z = math.radians(zenith_deg)
+    a = math.radians(azimuth_deg + north_offset_deg)
+    return {"success": True, "message": "", "zenith_deg": zenith_deg,
+            "azimuth_deg": (azimuth_deg + north_offset_deg) % 360.0,
+            "sun_in_world": (math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)),
+            "residual_rms": 0.0, "confidence": 1.0, "spread_deg": 0.0, "sun_intensity": None,
+            "ambient_intensity": None, "seconds": 0.0}
+
+
 def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
         options: RunOptions, progress: Optional[Callable[[float], bool]] = None
         ) -> trackfile.Track:
@@ -109,7 +124,11 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
 
     t0 = time.perf_counter()
     sub = None if progress is None else (lambda f: progress(0.1 * f))
-    init = estimate_initial(scene, camera, first_bgr, options, sub)
+    if options.initial_sun is not None:
+        init = _given_initial(*options.initial_sun, north)
+        track.method["initial"] = "given"
+    else:
+        init = estimate_initial(scene, camera, first_bgr, options, sub)
     if not init["success"]:
         reason = f"initial Sun failed: {init['message']}"
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]

@@ -20,7 +20,7 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 
 import evaluate  # noqa: E402
-from core import evaluation  # noqa: E402
+from core import evaluation, trackfile  # noqa: E402
 
 PRESETS = ["plaza", "southern_winter", "tropic_noon", "nordic_autumn", "indoor_window"]
 SIZES = {  # generator flags per size
@@ -44,11 +44,39 @@ def last_error(log):
         return "see " + log
 
 
+def print_shadow_scores(out, method, presets, size):
+    """Precision/recall of our ground-shadow detection vs the truth masks."""
+    import json
+    cells = {}
+    for preset in presets:
+        scene_dir = os.path.join(out, "scenes", f"{preset}-{size}")
+        track = os.path.join(out, "tracks", method, f"{preset}.sun.json")
+        if not os.path.exists(track):
+            continue
+        log = os.path.join(out, "logs", f"shadows-{method}-{preset}.log")
+        blender(os.path.join(scene_dir, "scene.blend"), "--python",
+                os.path.join(ROOT, "bench", "score_shadows.py"), "--", track,
+                os.path.join(scene_dir, "truth.sun.json"), log=log)
+        for line in open(log):
+            if line.startswith("SHADOWS "):
+                cells[preset] = json.loads(line[8:])["mean"]
+    if not cells:
+        return
+    width = max(20, max(len(p) + 2 for p in cells))
+    print("Shadow detection vs truth masks (mean over mask frames):")
+    for key, label in (("pixel_precision", "Shadow px precision"), ("pixel_recall", "Shadow px recall"),
+                       ("edge_precision", "Shadow edge precision"), ("edge_recall", "Shadow edge recall")):
+        print(label.ljust(22) + "".join(
+            (f"{cells[p][key]:.2f}" if p in cells and cells[p] else "-").rjust(width) for p in presets))
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--presets", default=",".join(PRESETS))
     p.add_argument("--size", choices=sorted(SIZES), default="bench")
-    p.add_argument("--methods", default="default")
+    p.add_argument("--methods", default="default,thesis,default+exact_initial",
+                   help="comma-separated; +exact_initial starts the tracker from the true "
+                        "Sun on frame 1 (measures tracking alone)")
     p.add_argument("--out", default=os.path.join(ROOT, "build", "accuracy"))
     p.add_argument("--regenerate", action="store_true")
     args = p.parse_args(argv)
@@ -79,9 +107,17 @@ def main(argv=None):
                 os.unlink(track)
             log = os.path.join(out, "logs", f"estimate-{method}-{preset}.log")
             t0 = time.perf_counter()
+            base, _, variant = method.partition("+")
+            extra = []
+            if variant == "exact_initial":
+                truth = trackfile.read_track(os.path.join(scene_dir, "truth.sun.json"))
+                first = truth.frames[0]
+                # The user .blend knows no north: azimuths are world ones.
+                extra = ["--initial-sun", str(first.zenith_deg),
+                         str((first.azimuth_deg + truth.north_offset_deg) % 360)]
             rc = blender(os.path.join(scene_dir, "scene.blend"), "--python-exit-code", "1",
                          "--python", os.path.join(ROOT, "examples", "run_estimate.py"), "--",
-                         "--out", track, "--method", method, log=log)
+                         "--out", track, "--method", base, *extra, log=log)
             seconds = time.perf_counter() - t0
             report = evaluate.score(preset, track, os.path.join(scene_dir, "truth.sun.json"))
             if rc != 0:
@@ -93,6 +129,8 @@ def main(argv=None):
             evaluation.plot(report, os.path.join(out, "plots", f"{method}-{preset}.png"))
         print(f"\n== method: {method} (size: {args.size})")
         print(evaluation.format_table(reports))
+        if base == "default":
+            print_shadow_scores(out, method, presets, args.size)
     print(f"\nplots and logs in {out}")
 
 
