@@ -43,6 +43,13 @@ def parse_args(argv):
                    help="keyframe a Sun lamp from the track")
     p.add_argument("--save", help="save the .blend here afterwards")
     p.add_argument("--render-ar", metavar="DIR", help="render the AR composite here")
+    place = p.add_argument_group("place and time (for --smoothing physical)")
+    place.add_argument("--latitude", type=float, help="degrees, north positive")
+    place.add_argument("--longitude", type=float, help="degrees, east positive")
+    place.add_argument("--date", help="YYYY-MM-DD of the first frame (local)")
+    place.add_argument("--start-time", help="HH:MM[:SS] local time of the first frame")
+    place.add_argument("--utc-offset", type=float, default=0.0, help="hours, e.g. 2 for CEST")
+    place.add_argument("--frame-seconds", type=float, help="seconds between frames")
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
@@ -62,6 +69,41 @@ def parse_frames(text, clip):
         raise ValueError(f"--frames {text} outside the clip's frames "
                          f"{clip.frame_start}:{clip.frame_end}")
     return a, b
+
+
+def physical_inputs(args, context, frames):
+    """Place and time for physical smoothing, from the flags or from Blender's
+    Sun Position add-on (its latitude, longitude, date, time and UTC zone)."""
+    import datetime as dt
+    sp = getattr(context.scene, "sun_pos_properties", None)
+    lat = args.latitude if args.latitude is not None else getattr(sp, "latitude", None)
+    lon = args.longitude if args.longitude is not None else getattr(sp, "longitude", None)
+    utc = args.utc_offset if args.utc_offset else getattr(sp, "UTC_zone", 0.0)
+    try:
+        if args.date:
+            day = dt.date.fromisoformat(args.date)
+        elif sp is not None:
+            day = dt.date(sp.year, sp.month, sp.day)
+        else:
+            day = None
+        if args.start_time:
+            parts = [float(v) for v in args.start_time.split(":")]
+            hours = parts[0] + (parts[1] if len(parts) > 1 else 0) / 60 + \
+                (parts[2] if len(parts) > 2 else 0) / 3600
+        else:
+            hours = getattr(sp, "time", None)
+    except ValueError as e:
+        fail(EXIT_USAGE, f"bad --date or --start-time: {e}")
+    missing = [name for name, v in (("--latitude", lat), ("--longitude", lon), ("--date", day),
+                                    ("--start-time", hours), ("--frame-seconds", args.frame_seconds))
+               if v is None]
+    if missing:
+        fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing) +
+             " (or Blender's Sun Position add-on values)")
+    tz = dt.timezone(dt.timedelta(hours=utc))
+    first = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
+    return {"first_time": first, "frame_seconds": args.frame_seconds,
+            "latitude_deg": lat, "longitude_deg": lon}
 
 
 class CliError(Exception):
@@ -98,14 +140,17 @@ def _run(argv):
     except ValueError as e:
         fail(EXIT_USAGE, str(e))
 
+    physical = {}
     if args.smoothing == "physical":
-        fail(EXIT_USAGE, "--smoothing physical is not implemented yet; use online or two_pass")
+        physical = physical_inputs(args, context, frames)
     if not hasattr(bpy.types.Scene, "sunlapse"):
         register()  # properties and operators, as in the UI
     try:
         scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
             context, collection=collection, ground=args.ground, frames=frames,
             method=args.method, smoothing=args.smoothing)
+        for key, value in physical.items():
+            setattr(options, key, value)
         if args.initial_sun:
             z, a = args.initial_sun
             if not (0 <= z < 90):

@@ -132,12 +132,38 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
         north_offset_deg=bridge.scene_north_offset_deg(context), ground_object_ids=ids)
+    if options.smoothing == "physical":
+        physical_from_settings(context, settings, options)
     for w in cam.warnings:
         print(f"sunlapse: warning: {w}")
     scene_n = bridge.build_scene(model)
     camera_n = bridge.build_camera(cam)
     track_extra = {"ground": names, "model_objects": model.names}
     return scene_n, camera_n, clip, list(range(frames[0], frames[1] + 1)), options, track_extra
+
+
+def physical_from_settings(context, settings, options):
+    """Place and time from the panel, or from Blender's Sun Position add-on
+    when the panel's date is empty; left unset (the run then falls back to
+    two-pass and says so) when neither knows them."""
+    import datetime as dt
+    sp = getattr(context.scene, "sun_pos_properties", None)
+    lat, lon, utc, hours = settings.latitude, settings.longitude, settings.utc_offset, settings.start_hour
+    day = None
+    if settings.date:
+        try:
+            day = dt.date.fromisoformat(settings.date)
+        except ValueError:
+            raise bridge.SceneError(f"Date '{settings.date}' is not YYYY-MM-DD")
+    elif sp is not None:
+        day = dt.date(sp.year, sp.month, sp.day)
+        lat, lon, utc, hours = sp.latitude, sp.longitude, sp.UTC_zone, sp.time
+    if day is None or settings.frame_seconds <= 0:
+        return
+    tz = dt.timezone(dt.timedelta(hours=utc))
+    options.first_time = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
+    options.frame_seconds = settings.frame_seconds
+    options.latitude_deg, options.longitude_deg = lat, lon
 
 
 def finish_run(context, track, clip, extra):

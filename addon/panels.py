@@ -21,6 +21,13 @@ def draw_sun_panel(layout, context):
     col.prop(settings, "ground_objects")
     col.prop(settings, "method")
     col.prop(settings, "smoothing")
+    if settings.smoothing == "physical":
+        box = col.box()
+        if getattr(context.scene, "sun_pos_properties", None) is not None and not settings.date:
+            box.label(text="Place and time: Sun Position add-on", icon="INFO")
+        for name in ("latitude", "longitude", "date", "start_hour", "utc_offset"):
+            box.prop(settings, name)
+        box.prop(settings, "frame_seconds")
     col.prop(settings, "ignore_top_rows")
     row = col.row(align=True)
     row.prop(settings, "use_frame_range", text="")

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 from . import native_loader
-from .core import smoothing, trackfile
+from .core import smoothing, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -37,6 +37,12 @@ class RunOptions:
     # Given Sun on the first frame (zenith, azimuth as in the track file):
     # skips the initial estimate, to measure the tracker alone.
     initial_sun: Optional[tuple] = None
+    # For smoothing "physical": the first frame's time (aware datetime), the
+    # seconds between frames and the place (degrees, east positive).
+    first_time: Optional[object] = None
+    frame_seconds: Optional[float] = None
+    latitude_deg: Optional[float] = None
+    longitude_deg: Optional[float] = None
 
 
 def _check_progress(progress, fraction):
@@ -97,6 +103,36 @@ def _given_initial(zenith_deg, azimuth_deg, north_offset_deg):
             "sun_in_world": (math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)),
             "residual_rms": 0.0, "confidence": 1.0, "spread_deg": 0.0, "sun_intensity": None,
             "ambient_intensity": None, "seconds": 0.0}
+
+
+def _physical(native, track, numbers, raws, options, north):
+    """Fits the Sun's path through the raw angles; returns (zenith, geographic
+    azimuth, north offset) per frame, or (None, None, north) with the reason
+    kept in the track when the inputs are missing or the fit fails."""
+    need = (options.first_time, options.frame_seconds, options.latitude_deg,
+            options.longitude_deg)
+    if any(v is None for v in need):
+        track.extra["smoothing_message"] = ("physical smoothing needs the first frame's time, "
+                                            "the seconds per frame and the place; used two_pass")
+        track.method["smoothing"] = "two_pass"
+        return None, None, north
+    times = sunpath.frame_times(options.first_time, options.frame_seconds, numbers)
+
+    def sun(t, lat, lon):
+        return native.sun_position(t.year, t.month, t.day, t.hour, t.minute,
+                                   t.second + t.microsecond * 1e-6, lat, lon)
+    world_az = [None if r[2] is None else (r[2] + north) % 360.0 for r in raws]
+    fit = sunpath.fit_sun_path(times, [r[1] for r in raws], world_az, [r[3] for r in raws], sun,
+                               options.latitude_deg, options.longitude_deg)
+    if not fit.success:
+        track.extra["smoothing_message"] = f"physical fit failed ({fit.message}); used two_pass"
+        track.method["smoothing"] = "two_pass"
+        return None, None, north
+    track.extra["sun_path_fit"] = {
+        "latitude_deg": fit.latitude_deg, "longitude_deg": fit.longitude_deg,
+        "time_offset_s": fit.time_offset_s, "north_offset_deg": fit.north_offset_deg,
+        "median_residual_deg": fit.rms_deg, "message": fit.message or None}
+    return fit.zenith_deg, fit.azimuth_deg, fit.north_offset_deg
 
 
 def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
@@ -174,9 +210,21 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
 
     _check_progress(progress, 0.97)
     numbers = [r[0] for r in raws]
-    zs, azs = smoothing.smooth_angles(
-        numbers, [r[1] for r in raws], [r[2] for r in raws], [r[3] for r in raws],
-        options.smoothing, degree=TWO_PASS_DEGREE[options.method])
+    zs = azs = None
+    if options.smoothing == "physical":
+        zs, azs, north = _physical(native, track, numbers, raws, options, north)
+        if zs is not None:  # azimuths are geographic now, with the fitted north
+            raws = [(f, z, None if a is None else (a + track.north_offset_deg - north) % 360.0,
+                     c, reason, res) for (f, z, a, c, reason, res) in raws]
+            if track.initial:
+                track.initial["azimuth_deg"] = (track.initial["azimuth_deg"]
+                                                + track.north_offset_deg - north) % 360.0
+            track.north_offset_deg = north
+    if zs is None:
+        mode = "two_pass" if options.smoothing == "physical" else options.smoothing
+        zs, azs = smoothing.smooth_angles(
+            numbers, [r[1] for r in raws], [r[2] for r in raws], [r[3] for r in raws],
+            mode, degree=TWO_PASS_DEGREE[options.method])
     for (f, z, a, conf, reason, res), zs_f, as_f in zip(raws, zs, azs):
         est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,
                                       raw_zenith_deg=z, raw_azimuth_deg=a,

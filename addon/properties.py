@@ -1,7 +1,8 @@
 """Properties of sunlapse, kept apart from the UI."""
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, IntProperty, PointerProperty, StringProperty
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty,
+                       PointerProperty, StringProperty)
 
 
 def _is_camera(self, obj):
@@ -39,8 +40,21 @@ class SunlapseSettings(bpy.types.PropertyGroup):
     smoothing: EnumProperty(
         name="Smoothing",
         items=[("two_pass", "Two-Pass", "Fit the whole clip (best for renders)"),
-               ("online", "Online", "Causal smoothing, as if the clip were playing")],
+               ("online", "Online", "Causal smoothing, as if the clip were playing"),
+               ("physical", "Physical", "Fit the Sun's true path: needs the place, the "
+                                        "date, the first frame's time and the frame interval")],
         default="two_pass")
+    latitude: FloatProperty(name="Latitude", min=-90, max=90, default=0.0,
+                            description="Degrees, north positive")
+    longitude: FloatProperty(name="Longitude", min=-180, max=180, default=0.0,
+                             description="Degrees, east positive")
+    date: StringProperty(name="Date", default="", description="YYYY-MM-DD of the first frame")
+    start_hour: FloatProperty(name="Start Time", min=0, max=24, default=12.0, subtype="TIME",
+                              description="Local time of the first frame, hours")
+    utc_offset: FloatProperty(name="UTC Offset", min=-14, max=14, default=0.0,
+                              description="Hours between local time and UTC")
+    frame_seconds: FloatProperty(name="Seconds per Frame", min=0, default=0.0,
+                                 description="Time between two frames of the time-lapse")
     use_frame_range: BoolProperty(
         name="Frame Range", default=False,
         description="Estimate only these frames (default: the whole clip)")

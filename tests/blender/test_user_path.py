@@ -180,3 +180,32 @@ def test_undo_restores_the_scene_after_apply(estimated):
     bpy.ops.ed.undo()
     assert not [o for o in bpy.data.objects if o.type == "LIGHT"]
     assert results.load_track() is not None  # the estimate itself stays
+
+
+def test_scripted_run_with_physical_smoothing(tiny_plaza, tmp_path):
+    import datetime as dt
+    import json
+    out, truth = tiny_plaza
+    d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
+    flags = ["--smoothing", "physical", "--latitude", "48.85", "--longitude", "2.35",
+             "--date", d0.date().isoformat(), "--start-time", d0.strftime("%H:%M"),
+             "--utc-offset", "2", "--frame-seconds", str((d1 - d0).total_seconds())]
+    path = str(tmp_path / "p.sun.json")
+    proc = run_estimate(os.path.join(out, "scene.blend"), path, *flags)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    track = json.load(open(path))
+    fit = track["sun_path_fit"]
+    assert track["method"]["smoothing"] == "physical"
+    assert abs(((fit["north_offset_deg"] - truth.north_offset_deg) + 180) % 360 - 180) < 3
+    assert track["north_offset_deg"] == fit["north_offset_deg"]
+    for f, t in zip(track["frames"], truth.frames):  # geographic azimuths now
+        assert abs(((f["azimuth_deg"] - t.azimuth_deg) + 180) % 360 - 180) < 5
+
+
+def test_physical_smoothing_says_what_it_needs(tiny_plaza, tmp_path):
+    out, truth = tiny_plaza
+    proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "p.json"),
+                        "--smoothing", "physical", "--latitude", "48.85")
+    assert proc.returncode == 2
+    line = [l for l in proc.stderr.splitlines() if l.startswith("sunlapse: error:")][0]
+    assert "--longitude" in line and "--frame-seconds" in line
