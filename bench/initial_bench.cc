@@ -12,11 +12,8 @@ using namespace sunlapse;
 
 int main() {
   // Ground, a box, three poles and a wall, seen at 1920x1080.
-  testing::Mesh m = testing::BoxAndPole();
-  m.Box({-3, 2, 0}, {-2.85f, 2.15f, 2.5f}, 3);
-  m.Box({-4, 5, 0}, {1, 5.3f, 2}, 4);
-  const Scene scene = m.Build();
-  const Camera cam = testing::LookAt({3, -11, 8}, {0, 0, 0}, 1920, 1080);
+  const Scene scene = testing::BenchScene().Build();
+  const Camera cam = testing::BenchCamera();
   const Eigen::Vector3d sun = SunVector(45, 210);
   testing::RenderOptions ro;
   const double albedo[] = {0.35, 0.8, 0.15, 0.15, 0.6};

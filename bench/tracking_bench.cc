@@ -26,11 +26,8 @@ static long RssKb() {
 }
 
 int main() {
-  testing::Mesh m = testing::BoxAndPole();
-  m.Box({-3, 2, 0}, {-2.85f, 2.15f, 2.5f}, 3);
-  m.Box({-4, 5, 0}, {1, 5.3f, 2}, 4);
-  const Scene scene = m.Build();
-  const Camera cam = testing::LookAt({3, -11, 8}, {0, 0, 0}, 1920, 1080);
+  const Scene scene = testing::BenchScene().Build();
+  const Camera cam = testing::BenchCamera();
   auto sun = [](int f) {
     const double z = (55 - 0.3 * f) * M_PI / 180, a = (120 + 0.5 * f) * M_PI / 180;
     return Eigen::Vector3d(std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z));

@@ -63,13 +63,36 @@ py::dict TrackedToDict(const TrackedFrame& r) {
   return d;
 }
 
+// initialize() and track() of a tracker class, with the GIL released.
+template <typename Tracker, typename Class>
+void BindTrackerMethods(Class& cls) {
+  cls.def(
+         "initialize",
+         [](Tracker& t, const py::object& frame, const Eigen::Vector3d& sun) {
+           const cv::Mat img = GrayArg(frame);
+           py::gil_scoped_release release;
+           return t.Initialize(img, sun);
+         },
+         py::arg("frame"), py::arg("sun_in_world"),
+         "First frame (float32 (H,W) gray) and the Sun found on it.")
+      .def(
+          "track",
+          [](Tracker& t, const py::object& frame) {
+            const cv::Mat img = GrayArg(frame);
+            py::gil_scoped_release release;
+            return t.Track(img);
+          },
+          py::arg("frame"),
+          "Next frame (float32 (H,W) gray, or None if it could not be decoded).");
+}
+
 }  // namespace
 
 void BindEstimate(py::module_& m) {
-  py::class_<ShadowTracker>(m, "ShadowTracker",
+  py::class_<ShadowTracker> shadow_tracker(m, "ShadowTracker",
                             "Follows the Sun through a clip by the model's cast shadows "
-                            "on the ground (metric; see shadow_tracker.h).")
-      .def(py::init([](const Scene& scene, const Camera& camera,
+                            "on the ground (metric; see shadow_tracker.h).");
+  shadow_tracker.def(py::init([](const Scene& scene, const Camera& camera,
                        std::vector<int32_t> ground_object_ids, int ignore_top_rows,
                        int ignore_bottom_rows, int band_radius_px, int max_band_pixels,
                        double min_contrast, int subsamples, bool normalize_albedo) {
@@ -89,27 +112,11 @@ void BindEstimate(py::module_& m) {
            py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 800,
            py::arg("min_contrast") = 0.5, py::arg("subsamples") = 2,
            py::arg("normalize_albedo") = true,
-           py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
-      .def(
-          "initialize",
-          [](ShadowTracker& t, const py::object& frame, const Eigen::Vector3d& sun) {
-            const cv::Mat img = GrayArg(frame);
-            py::gil_scoped_release release;
-            return t.Initialize(img, sun);
-          },
-          py::arg("frame"), py::arg("sun_in_world"))
-      .def(
-          "track",
-          [](ShadowTracker& t, const py::object& frame) {
-            const cv::Mat img = GrayArg(frame);
-            py::gil_scoped_release release;
-            return t.Track(img);
-          },
-          py::arg("frame"),
-          "Next frame (float32 (H,W) linear gray, or None if it could not be decoded).");
-  py::class_<ThesisTracker>(m, "ThesisTracker",
-                            "The thesis's tracker (five criteria + Algorithm 1), the baseline.")
-      .def(py::init([](const Scene& scene, const Camera& camera,
+           py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  BindTrackerMethods<ShadowTracker>(shadow_tracker);
+  py::class_<ThesisTracker> thesis_tracker(m, "ThesisTracker",
+                            "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
+  thesis_tracker.def(py::init([](const Scene& scene, const Camera& camera,
                        std::vector<int32_t> ground_object_ids, int ignore_top_rows) {
              ThesisTrackerOptions o;
              o.ground_object_ids = std::move(ground_object_ids);
@@ -117,23 +124,8 @@ void BindEstimate(py::module_& m) {
              return std::make_unique<ThesisTracker>(scene, camera, o);
            }),
            py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
-           py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
-      .def(
-          "initialize",
-          [](ThesisTracker& t, const py::object& frame, const Eigen::Vector3d& sun) {
-            const cv::Mat img = GrayArg(frame);
-            py::gil_scoped_release release;
-            return t.Initialize(img, sun);
-          },
-          py::arg("frame"), py::arg("sun_in_world"))
-      .def(
-          "track",
-          [](ThesisTracker& t, const py::object& frame) {
-            const cv::Mat img = GrayArg(frame);
-            py::gil_scoped_release release;
-            return t.Track(img);
-          },
-          py::arg("frame"));
+           py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  BindTrackerMethods<ThesisTracker>(thesis_tracker);
   py::class_<TrackedFrame>(m, "TrackedFrame")
       .def("as_dict", &TrackedToDict)
       .def_readonly("ok", &TrackedFrame::ok)

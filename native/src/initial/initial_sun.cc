@@ -202,6 +202,16 @@ void ResidualStats(const std::vector<double>& r, double loss_scale,
   out->residual_rms = inliers > 0 ? std::sqrt(sum2 / inliers) : 0.0;
 }
 
+// The small dense problems here (a few parameters, thousands of residuals).
+void SolveSmall(ceres::Problem* problem, int max_iterations) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = max_iterations;
+  so.num_threads = 2;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, problem, &summary);
+}
+
 // Final robust Lambertian fit with the direction fixed: I = rho_o (a + s sh).
 // rho of the object with most pixels is held at 1 (the scale ambiguity).
 class AlbedoShadingResidual : public ceres::SizedCostFunction<1, 1, 2> {
@@ -244,12 +254,7 @@ void FitIntensities(const Samples& s, const std::vector<float>& shading,
   problem.SetParameterBlockConstant(&rho[ref]);
   problem.SetParameterLowerBound(light, 0, 0.0);
   problem.SetParameterLowerBound(light, 1, 0.0);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 50;
-  so.num_threads = 2;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  SolveSmall(&problem, 50);
   out->ambient_intensity = light[0];
   out->sun_intensity = light[1];
   out->albedo_per_object.assign(num_objects, 1.0);
@@ -390,12 +395,7 @@ void EstimateThesis(const Scene& scene, const Samples& s,
     problem.AddResidualBlock(new ThesisResidual(s.intensity[i], coef[i]), nullptr, x.data());
   }
   for (int k = 0; k <= K; ++k) problem.SetParameterLowerBound(x.data(), k, 0.0);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 100;
-  so.num_threads = 2;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  SolveSmall(&problem, 100);
   Report(progress, 0.95);
 
   Eigen::Vector3d centre_of_intensity = Eigen::Vector3d::Zero();

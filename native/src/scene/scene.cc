@@ -42,6 +42,26 @@ bool ValidRay(const float* o, const float* d, float* norm) {
          std::isfinite(o[1]) && std::isfinite(o[2]);
 }
 
+// A ray query from o along unit direction d (Embree's fields in one place).
+RTCRayHit MakeRayHit(const float o[3], const float d[3], float t_near, float t_far) {
+  RTCRayHit rh;
+  rh.ray.org_x = o[0];
+  rh.ray.org_y = o[1];
+  rh.ray.org_z = o[2];
+  rh.ray.dir_x = d[0];
+  rh.ray.dir_y = d[1];
+  rh.ray.dir_z = d[2];
+  rh.ray.tnear = t_near;
+  rh.ray.tfar = t_far;
+  rh.ray.time = 0.f;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
 void WriteMiss(int64_t i, const HitBuffers& out) {
   if (out.point_in_world) {
     for (int k = 0; k < 3; ++k) out.point_in_world[3 * i + k] = kNaN;
@@ -263,21 +283,8 @@ void Scene::Intersect(int64_t n, const float* origins, const float* directions,
             WriteMiss(i, out);
             continue;
           }
-          RTCRayHit rh;
-          rh.ray.org_x = o[0];
-          rh.ray.org_y = o[1];
-          rh.ray.org_z = o[2];
-          rh.ray.dir_x = d[0] / norm;
-          rh.ray.dir_y = d[1] / norm;
-          rh.ray.dir_z = d[2] / norm;
-          rh.ray.tnear = t_near;
-          rh.ray.tfar = t_far;
-          rh.ray.time = 0.f;
-          rh.ray.mask = 0xFFFFFFFFu;
-          rh.ray.id = 0;
-          rh.ray.flags = 0;
-          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          const float unit[3] = {d[0] / norm, d[1] / norm, d[2] / norm};
+          RTCRayHit rh = MakeRayHit(o, unit, t_near, t_far);
           rtcIntersect1(s.scene, &ctx, &rh);
           s.WriteHit(i, rh, 1.f, out);
         }
@@ -302,21 +309,7 @@ void Scene::IntersectPixels(const Camera& camera, int64_t n,
             continue;
           }
           const Eigen::Vector3f d = camera.PixelToRayInWorld(px).cast<float>();
-          RTCRayHit rh;
-          rh.ray.org_x = center.x();
-          rh.ray.org_y = center.y();
-          rh.ray.org_z = center.z();
-          rh.ray.dir_x = d.x();
-          rh.ray.dir_y = d.y();
-          rh.ray.dir_z = d.z();
-          rh.ray.tnear = 0.f;
-          rh.ray.tfar = kInf;
-          rh.ray.time = 0.f;
-          rh.ray.mask = 0xFFFFFFFFu;
-          rh.ray.id = 0;
-          rh.ray.flags = 0;
-          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          RTCRayHit rh = MakeRayHit(center.data(), d.data(), 0.f, kInf);
           rtcIntersect1(s.scene, &ctx, &rh);
           s.WriteHit(i, rh, 1.f, out);
         }

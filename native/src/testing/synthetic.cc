@@ -38,6 +38,15 @@ Mesh BoxAndPole() {
   return m;
 }
 
+Mesh BenchScene() {
+  Mesh m = BoxAndPole();
+  m.Box({-3, 2, 0}, {-2.85f, 2.15f, 2.5f}, 3);
+  m.Box({-4, 5, 0}, {1, 5.3f, 2}, 4);
+  return m;
+}
+
+Camera BenchCamera() { return LookAt({3, -11, 8}, {0, 0, 0}, 1920, 1080); }
+
 Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int width,
               int height, double lens_mm) {
   BlenderCameraParams p;

@@ -27,6 +27,10 @@ struct Mesh {
 
 // Ground (id 0), a box (1) and a pole (2).
 Mesh BoxAndPole();
+// BoxAndPole plus a second pole (3) and a wall (4): the benchmarks' scene.
+Mesh BenchScene();
+// The benchmarks' camera on BenchScene at 1920x1080.
+Camera BenchCamera();
 
 // A Blender-style camera at `eye` looking at `target` (+Z up).
 Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int width,
