@@ -23,6 +23,8 @@ def store_track(track: trackfile.Track) -> bpy.types.Text:
     text = bpy.data.texts.get(TEXT_NAME) or bpy.data.texts.new(TEXT_NAME)
     text.clear()
     text.write(json.dumps(trackfile.to_json(track), indent=1))
+    from . import overlay
+    overlay.invalidate()
     return text
 
 

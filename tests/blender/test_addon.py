@@ -22,6 +22,8 @@ def test_register_and_unregister_leave_nothing_behind(empty_scene):
         assert not hasattr(bpy.types, "VIEW3D_PT_sunlapse")
         assert not hasattr(bpy.types, "SunlapseSettings")
         assert "sunlapse_check_scene" not in dir(bpy.ops.clip)
+        from sunlapse import overlay
+        assert overlay.invalidate not in bpy.app.handlers.load_post
     finally:
         sunlapse.register()
 
@@ -123,3 +125,19 @@ def test_scripted_run_reports_unknown_flags_in_one_line(empty_scene, tmp_path):
     proc = run_estimate(blend, str(tmp_path / "o.json"), "--nonsense")
     assert proc.returncode == 2
     assert "unrecognized arguments" in error_lines(proc)[0]
+
+
+def test_overlay_maps_clip_pixels_to_the_view(empty_scene):
+    from sunlapse import overlay
+
+    class View2D:  # records what the clip editor's view2d is asked
+        def view_to_region(self, u, v, clip=False):
+            return (u, v)
+
+    class Region:
+        view2d = View2D()
+
+    u, v = overlay.clip_to_region(Region(), 200, 100, -0.5, -0.5)   # top-left corner
+    assert (u, v) == (0.0, 1.0)
+    u, v = overlay.clip_to_region(Region(), 200, 100, 199.5, 99.5)  # bottom-right corner
+    assert (u, v) == (1.0, 0.0)
