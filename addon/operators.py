@@ -365,7 +365,99 @@ class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun,
+def marked_points(clip, frame):
+    """(name, ground xyz, OpenCV pixel) of every track with a marker on
+    `frame` whose name ends with its ground coordinates ("foot 0 0",
+    "3.2,-1.5", "x y z"); tracks without numbers are listed apart."""
+    import re
+
+    def numbers(name):  # whole tokens only: "p0 1 2" is the point (1, 2)
+        out = []
+        for token in re.split(r"[\s,;]+", name):
+            try:
+                out.append(float(token))
+            except ValueError:
+                pass
+        return out
+    w, h = clip.size
+    points, skipped = [], []
+    for track in clip.tracking.tracks:
+        marker = track.markers.find_frame(frame)
+        nums = numbers(track.name)
+        if marker is None or marker.mute:
+            continue
+        if len(nums) < 2:
+            skipped.append(track.name)
+            continue
+        xyz = (nums[-3], nums[-2], nums[-1]) if len(nums) >= 3 else (nums[-2], nums[-1], 0.0)
+        # Marker positions are 0..1 from the frame's bottom-left corner.
+        px = (marker.co[0] * w - 0.5, (1.0 - marker.co[1]) * h - 0.5)
+        points.append((track.name, xyz, px))
+    return points, skipped
+
+
+class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
+    """Match the camera to the clip from tracking markers on the current frame
+    whose track names give their ground coordinates in metres ("foot 0 0",
+    "corner 2.5 1.2"): focal length and pose (OpenCV), reprojection error"""
+    bl_idname = "clip.sunlapse_solve_camera"
+    bl_label = "Solve Camera from Marked Points"
+    bl_options = {"REGISTER", "UNDO"}
+
+    focal_mm: bpy.props.FloatProperty(
+        name="Focal Length", default=0.0, min=0.0, unit="CAMERA",
+        description="Known focal length (with a 36 mm sensor); 0: estimate it")
+
+    def execute(self, context):
+        import math
+        scene = context.scene
+        clip = bridge.active_movieclip(context)
+        if clip is None:
+            self.report({"ERROR"}, "No clip: open the footage in the Movie Clip Editor")
+            return {"CANCELLED"}
+        frame = scene.frame_current - clip.frame_start + 1
+        points, skipped = marked_points(clip, frame)
+        w, h = clip.size
+        try:
+            native = native_loader.require()
+            import numpy as np
+            world = np.array([p[1] for p in points], dtype=np.float64).reshape(-1, 3)
+            pixels = np.array([p[2] for p in points], dtype=np.float64).reshape(-1, 2)
+            side = w if w >= h else h  # AUTO sensor fit: the larger side
+            focal_px = self.focal_mm * side / 36.0 if self.focal_mm > 0 else 0.0
+            r = native.solve_camera(world, pixels, w, h, focal_px)
+        except (RuntimeError, ValueError) as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if not r["success"]:
+            extra = f" (tracks without coordinates in their names: {', '.join(skipped)})" if skipped else ""
+            self.report({"ERROR"}, r["message"] + extra)
+            return {"CANCELLED"}
+        cam_obj = scene.sunlapse.camera or scene.camera
+        if cam_obj is None:
+            cam_obj = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+            scene.collection.objects.link(cam_obj)
+            scene.camera = cam_obj
+        cam = cam_obj.data
+        cam.type = "PERSP"
+        cam.sensor_fit = "AUTO"
+        cam.sensor_width = 36.0
+        cam.shift_x = cam.shift_y = 0.0
+        cam.lens = r["focal_px"] * 36.0 / (w if w >= h else h)
+        from mathutils import Matrix
+        cam_obj.matrix_world = Matrix([list(row) for row in r["matrix_world"]])
+        scene.render.resolution_x, scene.render.resolution_y = w, h
+        scene.render.resolution_percentage = 100
+        scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+        worst = max(zip(r["errors_px"], [p[0] for p in points]))
+        level = "WARNING" if r["message"] else "INFO"
+        self.report({level}, f"Camera solved from {len(points)} points: lens {cam.lens:.1f} mm, "
+                             f"reprojection {r['rms_px']:.2f} px RMS (worst {worst[0]:.2f} px at "
+                             f"'{worst[1]}')" + (f": {r['message']}" if r["message"] else ""))
+        return {"FINISHED"}
+
+
+classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun,
            CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export,
            CLIP_OT_sunlapse_setup_ar)
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -35,6 +35,7 @@ def draw_sun_panel(layout, context):
     sub.active = settings.use_frame_range
     sub.prop(settings, "frame_start")
     sub.prop(settings, "frame_end")
+    layout.operator("clip.sunlapse_solve_camera", icon="CAMERA_DATA")
     layout.operator("clip.sunlapse_check_scene", icon="CHECKMARK")
     layout.operator("clip.sunlapse_estimate", icon="LIGHT_SUN")
     layout.operator("clip.sunlapse_initial_sun", icon="LIGHT_SUN")

@@ -7,6 +7,7 @@ namespace sunlapse::python {
 void BindScene(py::module_& m);
 void BindEphemeris(py::module_& m);
 void BindEstimate(py::module_& m);
+void BindCalibration(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -15,4 +16,5 @@ PYBIND11_MODULE(_native, m) {
   sunlapse::python::BindScene(m);
   sunlapse::python::BindEphemeris(m);
   sunlapse::python::BindEstimate(m);
+  sunlapse::python::BindCalibration(m);
 }
