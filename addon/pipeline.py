@@ -21,6 +21,12 @@ GAMMA = {"thesis": 1.0, "default": 2.2}
 # Two-pass smoothing: the thesis fits straight lines; over hours the Sun's
 # angles bend, so ours allows a cubic.
 TWO_PASS_DEGREE = {"thesis": 1, "default": 3}
+# Consecutive frames without shadows (that do show the scene) before the Sun
+# is searched for again from scratch.
+REACQUIRE_AFTER = 2
+# Tracking confidence below this counts toward re-acquisition (steady
+# tracking scores 0.9 and more on the rendered presets).
+DOUBTFUL_CONFIDENCE = 0.5
 
 
 class PipelineError(Exception):
@@ -190,6 +196,8 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         track.extra["tracking_message"] = first.reason
     track_seconds = 0.0
     ended = None
+    lost = 0
+    reacquired = []
     for k, f in enumerate(frames[1:], start=1):
         _check_progress(progress, 0.1 + 0.85 * k / len(frames))
         if ended is None:
@@ -203,6 +211,23 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         gray = None if bgr is None else _gray(bgr, camera, options.method)
         r = tracker.track(gray)
         track_seconds += r.seconds
+        doubtful = not r.ok or r.confidence < DOUBTFUL_CONFIDENCE
+        lost = lost + 1 if doubtful else 0
+        # Lost, or barely holding on, on frames that do show the scene (not
+        # black or undecodable): the Sun has left the tracker's reach (a jump
+        # in the clip, a bad start). Find it again from scratch and start over.
+        if (lost >= REACQUIRE_AFTER and gray is not None and options.method != "thesis"
+                and (r.ok or r.reason.startswith(("shadow lost", "no cast shadow")))):
+            again = estimate_initial(scene, camera, bgr, options)
+            if again["success"] and again["confidence"] > 0.3:
+                first = tracker.initialize(gray, again["sun_in_world"])
+                if first.ok:
+                    reacquired.append(f)
+                    lost = 0
+                    r = first
+                    r_z, r_a = again["zenith_deg"], again["azimuth_deg"]
+                    raws.append((f, r_z, (r_a - north) % 360.0, again["confidence"], None, r))
+                    continue
         if r.ok:
             raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
         else:
@@ -233,6 +258,8 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
             est.shadow_start_px = list(res.shadow_start_px)
             est.shadow_end_px = list(res.shadow_end_px)
         track.frames.append(est)
+    if reacquired:
+        track.extra["reacquired_frames"] = reacquired
     n_track = max(1, len(frames) - 1)
     track.extra["timing"] = {"initial_s": init["seconds"],
                              "tracking_ms_per_frame": 1000.0 * track_seconds / n_track,

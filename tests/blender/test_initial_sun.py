@@ -51,3 +51,21 @@ def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
             tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
             assert evaluation.angle_between_deg(est, tru) < 5.0
             assert f["shadow"]["end_px"] and f["confidence"] > 0
+
+
+def test_a_wrong_start_is_found_again_from_scratch(tiny_plaza, tmp_path):
+    # Start the tracker 40 deg off: it loses the shadows, the Sun is searched
+    # for again on a later frame, and from there the track is right.
+    out, truth = tiny_plaza
+    f1 = truth.frames[0]
+    wrong_azimuth = (f1.azimuth_deg + truth.north_offset_deg + 40.0) % 360
+    track_path = str(tmp_path / "wrong.sun.json")
+    proc = run_estimate(os.path.join(out, "scene.blend"), track_path,
+                        "--initial-sun", str(f1.zenith_deg), str(wrong_azimuth))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    track = json.load(open(track_path))
+    assert track["reacquired_frames"] == [3]
+    last, t = track["frames"][-1], truth.frames[-1]
+    est = evaluation.direction(last["raw_zenith_deg"], last["raw_azimuth_deg"] + track["north_offset_deg"])
+    tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
+    assert evaluation.angle_between_deg(est, tru) < 5.0
