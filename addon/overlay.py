@@ -89,7 +89,7 @@ def _draw():
         blf.position(0, b[0] + 8, b[1] + 8, 0)
         blf.size(0, 12)
         blf.draw(0, f"{est.confidence:.2f}" if est.reason is None else est.reason[:40])
-    lines = _series_plot(track, frame, 20, 20, min(260, region.width * 0.3), 70)
+    lines = _series_plot(track, frame, 20, 45, min(260, region.width * 0.3), 70)
     for pts, color in lines:
         shader.bind()
         shader.uniform_float("color", color)
