@@ -94,14 +94,20 @@ def main(argv=None):
             rc = blender("--python-exit-code", "1", "--python",
                          os.path.join(ROOT, "examples", "generate_scene.py"), "--",
                          "--preset", preset, "--out", scene_dir, *SIZES[args.size], log=log)
-            if rc != 0:
-                sys.exit(f"accuracy: generating {preset} failed: {last_error(log)}")
+            if rc != 0:  # reported in the table, the other presets go on
+                print(f"accuracy: generating {preset} failed: {last_error(log)}", flush=True)
+                continue
             print(f"rendered {preset} in {time.perf_counter() - t0:.0f} s", flush=True)
 
     for method in methods:
         reports = []
         for preset in presets:
             scene_dir = os.path.join(out, "scenes", f"{preset}-{args.size}")
+            truth_path = os.path.join(scene_dir, "truth.sun.json")
+            if not os.path.exists(truth_path):
+                reports.append(evaluation.SceneReport(preset, 0, 0,
+                                                      message="the scene could not be generated"))
+                continue
             track = os.path.join(out, "tracks", method, f"{preset}.sun.json")
             os.makedirs(os.path.dirname(track), exist_ok=True)
             if os.path.exists(track):
@@ -132,7 +138,7 @@ def main(argv=None):
                          "--python", os.path.join(ROOT, "examples", "run_estimate.py"), "--",
                          "--out", track, "--method", base, *extra, log=log)
             seconds = time.perf_counter() - t0
-            report = evaluate.score(preset, track, os.path.join(scene_dir, "truth.sun.json"))
+            report = evaluate.score(preset, track, truth_path)
             if rc != 0:
                 report.message = f"run_estimate failed ({last_error(log)})"
             elif report.message:

@@ -55,8 +55,8 @@ PRESETS = {
         ground="paving", layout="plaza"),
     "southern_winter": dict(
         description="Sydney, June afternoon, low Sun; asphalt; camera 4 m up, shallow",
-        lat=-33.87, lon=151.21, utc_offset_h=10, date=(2025, 6, 15), start=(14, 0),
-        minutes_per_frame=2.0, frames=90, north_offset_deg=35.0,
+        lat=-33.87, lon=151.21, utc_offset_h=10, date=(2025, 6, 15), start=(13, 0),
+        minutes_per_frame=1.5, frames=90, north_offset_deg=35.0,
         camera=dict(height=4.0, distance=12.0, yaw_deg=160.0, lens=24.0),
         ground="asphalt", layout="yard"),
     "tropic_noon": dict(
