@@ -12,7 +12,7 @@ packages=(
   libopencv-dev libeigen3-dev libceres-dev libembree-dev libtbb-dev
   liberfa-dev pybind11-dev libgtest-dev libgmock-dev
   python3-dev python3-numpy python3-pytest python3-matplotlib
-  blender ffmpeg
+  blender ffmpeg xvfb xauth
 )
 
 missing=()

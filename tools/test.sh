@@ -21,6 +21,10 @@ echo "== Blender"
   --python tests/blender/run_pytest.py -- -q --junitxml="$reports/blender.xml" \
   tests/blender) || status=1
 
+echo "== Blender with a window (Xvfb)"
+(cd "$here" && /usr/bin/python3 -m pytest -q -p no:cacheprovider \
+  --junitxml="$reports/ui.xml" tests/ui) || status=1
+
 /usr/bin/python3 - "$reports" <<'PY'
 import glob, sys, xml.etree.ElementTree as ET
 passed = failed = skipped = 0
