@@ -295,7 +295,8 @@ class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
             self.report({"ERROR"}, "No Sun track in this file: run Estimate Sun first")
             return {"CANCELLED"}
         try:
-            sun = results.apply_track(context, track, settings.sun_lamp, settings.sync_sky)
+            sun = results.apply_track(context, track, settings.sun_lamp, settings.sync_sky,
+                                      settings.keyframe_strength)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

@@ -42,6 +42,7 @@ def draw_sun_panel(layout, context):
     box = layout.box()
     box.prop(settings, "sun_lamp")
     box.prop(settings, "sync_sky")
+    box.prop(settings, "keyframe_strength")
     box.operator("clip.sunlapse_apply_lamp", icon="KEYINGSET")
     box.operator("clip.sunlapse_setup_ar", icon="RENDER_ANIMATION")
     box.operator("clip.sunlapse_export", icon="EXPORT")

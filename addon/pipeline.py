@@ -257,6 +257,8 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         if res is not None and res.shadow_end_px[0] == res.shadow_end_px[0]:  # not NaN
             est.shadow_start_px = list(res.shadow_start_px)
             est.shadow_end_px = list(res.shadow_end_px)
+        if res is not None and z is not None and 0 < res.contrast < 100:
+            est.sun_ambient_ratio = res.contrast
         track.frames.append(est)
     if reacquired:
         track.extra["reacquired_frames"] = reacquired

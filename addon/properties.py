@@ -60,6 +60,10 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         description="Estimate only these frames (default: the whole clip)")
     frame_start: IntProperty(name="Start", default=1)
     frame_end: IntProperty(name="End", default=250)
+    keyframe_strength: BoolProperty(
+        name="Keyframe Strength", default=False,
+        description="Also keyframe the lamp's strength from the measured sun/ambient "
+                    "light (the present strength stands for the clip's median)")
     sync_sky: BoolProperty(
         name="Sync Sky", default=True,
         description="Also keyframe the world's Nishita Sky Texture from the track")

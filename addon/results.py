@@ -79,10 +79,35 @@ def sky_node(scene):
     return None
 
 
-def apply_track(context, track, sun_obj=None, sync_sky=True):
+def _key_strength(sun, frames):
+    """Lamp strength per frame in proportion to the measured sun/ambient
+    ratio: the lamp's present strength stands for the clip's median ratio, so
+    a passing haze or the Sun getting low dims it as in the footage."""
+    ratios = [f.sun_ambient_ratio for f in frames if f.sun_ambient_ratio]
+    data = sun.data
+    _remove_own_keys(data, {"energy"}, data.get(KEYED_FRAMES_PROP, []))
+    if len(ratios) < 2:
+        return 0
+    ratios_sorted = sorted(ratios)
+    median = ratios_sorted[len(ratios_sorted) // 2]
+    base = data.get("sunlapse_base_energy", data.energy)
+    data["sunlapse_base_energy"] = base
+    keyed = []
+    for f in frames:
+        if f.sun_ambient_ratio:
+            data.energy = base * f.sun_ambient_ratio / median
+            data.keyframe_insert("energy", frame=f.frame)
+            keyed.append(f.frame)
+    data.energy = base
+    data[KEYED_FRAMES_PROP] = keyed
+    return len(keyed)
+
+
+def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=False):
     """Keys the Sun lamp (created if needed) on every estimated frame; returns it.
 
-    Running it again replaces its own keys only.
+    Running it again replaces its own keys only. With keyframe_strength the
+    lamp's strength follows the measured sun/ambient ratio.
     """
     frames = estimated_frames(track)
     if not frames:
@@ -94,6 +119,8 @@ def apply_track(context, track, sun_obj=None, sync_sky=True):
         lamp.point_lamp(sun, f.zenith_deg, f.azimuth_deg + track.north_offset_deg, frame=f.frame)
     sun[KEYED_FRAMES_PROP] = [f.frame for f in frames]
     _linear(sun, paths)
+    if keyframe_strength:
+        _key_strength(sun, frames)
     node = sky_node(context.scene) if sync_sky else None
     if node is not None:
         world = context.scene.world

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets everything up (tools/install.sh) and runs every test:
-#   GoogleTest (ctest), bpy-free Python tests, and tests inside Blender.
+#   GoogleTest (ctest), bpy-free Python tests, tests inside Blender (background)
+#   and in a Blender window under Xvfb.
 # Ends with one line "tests: N passed, N failed" summed over all runners.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -35,6 +35,8 @@ class FrameEstimate:
     shadow_start_px: Optional[List[float]] = None
     shadow_end_px: Optional[List[float]] = None
     reason: Optional[str] = None
+    # Sun / ambient light on the ground (from the shadow fit); optional.
+    sun_ambient_ratio: Optional[float] = None
 
     @property
     def has_estimate(self) -> bool:
@@ -76,6 +78,8 @@ def _frame_to_json(f: FrameEstimate) -> Dict[str, Any]:
         "raw_azimuth_deg": _num(f.raw_azimuth_deg),
         "confidence": float(f.confidence),
     }
+    if f.sun_ambient_ratio is not None:
+        d["sun_ambient_ratio"] = float(f.sun_ambient_ratio)
     if f.shadow_start_px is not None and f.shadow_end_px is not None:
         d["shadow"] = {"start_px": [float(v) for v in f.shadow_start_px],
                        "end_px": [float(v) for v in f.shadow_end_px]}
@@ -160,6 +164,7 @@ def from_json(d: Dict[str, Any], source: str = "<track>") -> Track:
                 shadow_start_px=shadow.get("start_px"),
                 shadow_end_px=shadow.get("end_px"),
                 reason=fd.get("reason"),
+                sun_ambient_ratio=_num(fd.get("sun_ambient_ratio")),
             ))
         except (KeyError, TypeError, ValueError) as e:
             raise TrackFileError(f"{source}: frame entry {i} is malformed: {e}")

@@ -209,3 +209,22 @@ def test_physical_smoothing_says_what_it_needs(tiny_plaza, tmp_path):
     assert proc.returncode == 2
     line = [l for l in proc.stderr.splitlines() if l.startswith("sunlapse: error:")][0]
     assert "--longitude" in line and "--frame-seconds" in line
+
+
+def test_strength_follows_the_measured_sun_ambient_ratio(estimated):
+    out, truth, track = estimated
+    ratios = {f.frame: f.sun_ambient_ratio for f in track.frames}
+    assert all(r and r > 0 for r in ratios.values()), ratios
+    scene = bpy.context.scene
+    sun = lamp.ensure_sun_lamp(bpy.context)
+    sun.data.energy = 5.0
+    scene.sunlapse.sun_lamp = sun
+    scene.sunlapse.keyframe_strength = True
+    for _ in range(2):  # a second run replaces its own keys
+        assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
+    fc = [fc for fc in sun.data.animation_data.action.fcurves if fc.data_path == "energy"]
+    assert len(fc) == 1 and len(fc[0].keyframe_points) == len(track.frames)
+    median = sorted(ratios.values())[len(ratios) // 2]
+    for f, r in ratios.items():
+        scene.frame_set(f)
+        assert sun.data.energy == pytest.approx(5.0 * r / median, rel=1e-4)
