@@ -141,3 +141,14 @@ def test_overlay_maps_clip_pixels_to_the_view(empty_scene):
     assert (u, v) == (0.0, 1.0)
     u, v = overlay.clip_to_region(Region(), 200, 100, 199.5, 99.5)  # bottom-right corner
     assert (u, v) == (1.0, 0.0)
+
+
+def test_panel_polls(empty_scene):
+    from types import SimpleNamespace as NS
+    poll = bpy.types.CLIP_PT_sunlapse.poll
+    assert poll(NS(space_data=NS(mode="TRACKING")))
+    assert not poll(NS(space_data=NS(mode="MASK")))      # mask editing: not ours
+    assert not poll(NS(space_data=None))
+    assert bpy.types.VIEW3D_PT_sunlapse.bl_category == "Sun"
+    # Apply needs a stored track; Estimate is always offered (it says what is missing).
+    assert not bpy.ops.clip.sunlapse_apply_lamp.poll()
