@@ -216,9 +216,9 @@ def build_layout(layout, model, extras, ground_mat):
     return ground
 
 
-def build_room(model, extras, wall_mat, dark, green, window_azimuth_world=None):
-    """A 6 x 5 x 3 m room around the origin; the window wall is placed later."""
-    # Walls are placed by place_room_walls once the Sun's side is known.
+def build_room(model, extras, wall_mat, dark, green):
+    """Furniture of a 6 x 5 x 3 m room around the origin; the walls come from
+    place_room_walls once the Sun's side is known."""
     _box("Table", (1.2, 0.8, 0.75), (0.5, 0.3, 0), 10, model, dark)
     _box("Cabinet", (0.5, 1.0, 1.6), (-2.2, -1.5, 0), 0, model, wall_mat)
     _extra("cylinder", "Vase", (-1.0, 1.2), extras, green)

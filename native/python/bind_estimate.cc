@@ -47,21 +47,6 @@ cv::Mat GrayArg(const py::object& frame) {
                  const_cast<float*>(data));
 }
 
-py::dict TrackedToDict(const TrackedFrame& r) {
-  py::dict d;
-  d["ok"] = r.ok;
-  d["reason"] = r.reason;
-  d["zenith_deg"] = r.zenith_deg;
-  d["azimuth_deg"] = r.azimuth_deg;
-  d["sun_in_world"] = r.sun_in_world;
-  d["confidence"] = r.confidence;
-  d["contrast"] = r.contrast;
-  d["band_pixels"] = r.band_pixels;
-  d["shadow_start_px"] = r.shadow_start_px;
-  d["shadow_end_px"] = r.shadow_end_px;
-  d["seconds"] = r.seconds;
-  return d;
-}
 
 // initialize() and track() of a tracker class, with the GIL released.
 template <typename Tracker, typename Class>
@@ -127,7 +112,6 @@ void BindEstimate(py::module_& m) {
            py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
   BindTrackerMethods<ThesisTracker>(thesis_tracker);
   py::class_<TrackedFrame>(m, "TrackedFrame")
-      .def("as_dict", &TrackedToDict)
       .def_readonly("ok", &TrackedFrame::ok)
       .def_readonly("reason", &TrackedFrame::reason)
       .def_readonly("zenith_deg", &TrackedFrame::zenith_deg)
