@@ -161,8 +161,10 @@ def _run(argv):
         fail(EXIT_SCENE, str(e))
     except pipeline.PipelineError as e:
         fail(EXIT_SCENE, str(e))
-    operators.finish_run(context, track, clip, dict(extra, method=args.method,
-                                                     frames=list(frames)))
+    summary = operators.finish_run(context, track, clip, dict(extra, method=args.method,
+                                                               frames=list(frames)))
+    if operators.report_level(track) == {"WARNING"}:
+        print(f"sunlapse: warning: {summary}")
     trackfile.write_track(args.out, track)
     init = track.initial
     if init:

@@ -175,8 +175,25 @@ def finish_run(context, track, clip, extra):
     raw = sum(1 for f in track.frames if f.raw_zenith_deg is not None)
     msg = (f"Sun estimated on {done}/{len(track.frames)} frames "
            f"({raw} measured, the rest from smoothing)")
+    # What kept frames from a measurement, in the user's words.
+    problems = [track.extra.get(k) for k in ("message", "tracking_message", "smoothing_message")]
+    problems = [p for p in problems if p]
+    from collections import Counter
+    reasons = Counter(f.reason for f in track.frames if f.raw_zenith_deg is None and f.reason)
+    if reasons and not track.extra.get("message"):
+        reason, count = reasons.most_common(1)[0]
+        problems.append(f"{count} frame(s): {reason}")
+    if problems:
+        msg += ": " + "; ".join(problems)
     context.scene.sunlapse.last_report = msg
     return msg
+
+
+def report_level(track):
+    """WARNING when frames lack a measurement or a stage had to give up."""
+    short = any(f.raw_zenith_deg is None for f in track.frames)
+    troubled = any(track.extra.get(k) for k in ("message", "tracking_message", "smoothing_message"))
+    return {"WARNING"} if short or troubled else {"INFO"}
 
 
 class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
@@ -205,7 +222,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         except (pipeline.PipelineError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        self.report({"INFO"}, finish_run(context, track, clip, extra))
+        self.report(report_level(track), finish_run(context, track, clip, extra))
         return {"FINISHED"}
 
     def invoke(self, context, event):
@@ -269,7 +286,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             self.report({"ERROR"}, f"Estimate failed: {self._error}")
             return {"CANCELLED"}
         _, _, clip, _, _, extra = self._job
-        self.report({"INFO"}, finish_run(context, self._result, clip, extra))
+        self.report(report_level(self._result), finish_run(context, self._result, clip, extra))
         return {"FINISHED"}
 
     def cancel(self, context):  # Blender closes the window / file
