@@ -87,10 +87,13 @@ def _gray(bgr, camera, method):
     return native.to_linear_gray(bgr, GAMMA[method])
 
 
-def estimate_initial(scene, camera, bgr, options: RunOptions, progress=None) -> dict:
-    """The initial Sun on one frame (uint8 BGR); the native result dict."""
+def estimate_initial(scene, camera, bgr, options: RunOptions, progress=None, gray=None) -> dict:
+    """The initial Sun on one frame (uint8 BGR, or its gray if already made);
+    the native result dict."""
     native = native_loader.require()
-    init = native.estimate_initial_sun(scene, camera, _gray(bgr, camera, options.method),
+    if gray is None:
+        gray = _gray(bgr, camera, options.method)
+    init = native.estimate_initial_sun(scene, camera, gray,
                                        method=options.method,
                                        ignore_top_rows=options.ignore_top_rows,
                                        progress=progress)
@@ -165,12 +168,13 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
                 "options": {"gamma": GAMMA[options.method]}})
 
     t0 = time.perf_counter()
+    first_gray = _gray(first_bgr, camera, options.method)
     sub = None if progress is None else (lambda f: progress(0.1 * f))
     if options.initial_sun is not None:
         init = _given_initial(*options.initial_sun, north)
         track.method["initial"] = "given"
     else:
-        init = estimate_initial(scene, camera, first_bgr, options, sub)
+        init = estimate_initial(scene, camera, first_bgr, options, sub, gray=first_gray)
     if not init["success"]:
         reason = f"initial Sun failed: {init['message']}"
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
@@ -189,7 +193,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     else:
         tracker = native.ShadowTracker(scene, camera, options.ground_object_ids,
                                        ignore_top_rows=options.ignore_top_rows)
-    first = tracker.initialize(_gray(first_bgr, camera, options.method), init["sun_in_world"])
+    first = tracker.initialize(first_gray, init["sun_in_world"])
     raws = [(frames[0], init["zenith_deg"], az0, init["confidence"], None, first)]
     if not first.ok:
         raws[0] = raws[0][:4] + (None, first)
@@ -218,7 +222,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         # in the clip, a bad start). Find it again from scratch and start over.
         if (lost >= REACQUIRE_AFTER and gray is not None and options.method != "thesis"
                 and (r.ok or r.reason.startswith(("shadow lost", "no cast shadow")))):
-            again = estimate_initial(scene, camera, bgr, options)
+            again = estimate_initial(scene, camera, bgr, options, gray=gray)
             if again["success"] and again["confidence"] > 0.3:
                 first = tracker.initialize(gray, again["sun_in_world"])
                 if first.ok:
