@@ -12,7 +12,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
-from . import native_loader
+from . import acquire, native_loader
 from .core import smoothing, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
@@ -144,6 +144,49 @@ def _physical(native, track, numbers, raws, options, north):
     return fit.zenith_deg, fit.azimuth_deg, fit.north_offset_deg
 
 
+class _ShadowSearchLazy:
+    """acquire.ShadowSearch with its background, built on first use only."""
+
+    def __init__(self, scene, camera, clip_path, clip_frame_start, frames, options):
+        self.args = (scene, camera, clip_path, clip_frame_start, list(frames), options)
+        self.search = self.back = None
+        self.failed = False
+
+    def _build(self):
+        scene, camera, clip_path, clip_frame_start, frames, options = self.args
+        n = min(acquire.BACKGROUND_SAMPLES, len(frames))
+        picks = sorted({frames[round(i * (len(frames) - 1) / max(1, n - 1))] for i in range(n)})
+        grays = []
+        for f in picks:
+            try:
+                grays.append(_gray(read_frame(clip_path, f - clip_frame_start), camera,
+                                   options.method))
+            except PipelineError:
+                continue
+        self.back = acquire.background(grays, options.ignore_top_rows)
+        if self.back is not None:
+            self.search = acquire.ShadowSearch(scene, camera, options.ground_object_ids,
+                                               top=options.ignore_top_rows)
+
+    def run(self, gray) -> Optional[dict]:
+        """An initial-Sun result (as estimate_initial's) from the shadows, or
+        None when the clip has too few frames or no shadow matches."""
+        if self.search is None and not self.failed:
+            self._build()
+            self.failed = self.search is None
+        if self.search is None:
+            return None
+        r = self.search.search(gray, self.back)
+        if r["sun_in_world"] is None or r["message"]:
+            return None
+        return {"success": True, "zenith_deg": r["zenith_deg"], "azimuth_deg": r["azimuth_deg"],
+                "sun_in_world": r["sun_in_world"], "confidence": r["precision"],
+                "residual_rms": None, "spread_deg": None, "sun_intensity": None,
+                "ambient_intensity": None, "seconds": r["seconds"],
+                "message": f"found by its cast shadows ({100 * r['precision']:.0f}% of the "
+                           f"predicted shadow is dark)"}
+
+
 def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
         options: RunOptions, progress: Optional[Callable[[float], bool]] = None
         ) -> trackfile.Track:
@@ -175,6 +218,15 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         track.method["initial"] = "given"
     else:
         init = estimate_initial(scene, camera, first_bgr, options, sub, gray=first_gray)
+    # Shading alone may leave the Sun undetermined (flat ground, thin casters):
+    # then the Sun is searched for by its cast shadows (acquire.py).
+    search = _ShadowSearchLazy(scene, camera, clip_path, clip_frame_start, frames, options)
+    if options.initial_sun is None and options.method != "thesis" and (
+            not init["success"] or init["confidence"] < DOUBTFUL_CONFIDENCE):
+        found = search.run(first_gray)
+        if found is not None:
+            init = found
+            track.method["initial"] = "shadow_search"
     if not init["success"]:
         reason = f"initial Sun failed: {init['message']}"
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
@@ -223,6 +275,8 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         if (lost >= REACQUIRE_AFTER and gray is not None and options.method != "thesis"
                 and (r.ok or r.reason.startswith(("shadow lost", "no cast shadow")))):
             again = estimate_initial(scene, camera, bgr, options, gray=gray)
+            if not again["success"] or again["confidence"] <= 0.3:
+                again = search.run(gray) or again
             if again["success"] and again["confidence"] > 0.3:
                 first = tracker.initialize(gray, again["sun_in_world"])
                 if first.ok:
