@@ -157,12 +157,14 @@ class _ShadowSearchLazy:
         n = min(acquire.BACKGROUND_SAMPLES, len(frames))
         picks = sorted({frames[round(i * (len(frames) - 1) / max(1, n - 1))] for i in range(n)})
         grays = []
+        reader = open_clip(clip_path, picks[0] - clip_frame_start)  # one reader, seeking
         for f in picks:
             try:
-                grays.append(_gray(read_frame(clip_path, f - clip_frame_start), camera,
-                                   options.method))
-            except PipelineError:
-                continue
+                bgr = reader.read() if reader.seek(f - clip_frame_start) else None
+            except StopIteration:
+                bgr = None
+            if bgr is not None:
+                grays.append(_gray(bgr, camera, options.method))
         self.back = acquire.background(grays, options.ignore_top_rows)
         if self.back is not None:
             self.search = acquire.ShadowSearch(scene, camera, options.ground_object_ids,
