@@ -8,6 +8,11 @@ the track file are a fixed contract (the accuracy benchmarks use them):
   [--smoothing online|two_pass|physical] [--method thesis|default]
   [--apply-lamp] [--save OUT.blend] [--render-ar DIR]
 
+Extensions (optional, later than the contract): --times CSV (each frame's
+capture time, see core/frametimes.py; default: the panel's Frame Times),
+--latitude/--longitude/--date/--start-time/--utc-offset/--frame-seconds/
+--fixed-latitude (place and time for physical smoothing), --initial-sun Z A.
+
 On failure: one line "sunlapse: error: <reason>" on stderr and a non-zero
 code (2 bad arguments, 3 the scene lacks something, 4 internal); the track
 file is written only when the run succeeds.
@@ -43,13 +48,22 @@ def parse_args(argv):
                    help="keyframe a Sun lamp from the track")
     p.add_argument("--save", help="save the .blend here afterwards")
     p.add_argument("--render-ar", metavar="DIR", help="render the AR composite here")
+    p.add_argument("--times", metavar="CSV",
+                   help="each frame's capture time (columns frame,local_time; local times use "
+                        "--utc-offset): frames are tracked in capture order and smoothed over "
+                        "real time; default: the scene's Frame Times setting")
     place = p.add_argument_group("place and time (for --smoothing physical)")
     place.add_argument("--latitude", type=float, help="degrees, north positive")
     place.add_argument("--longitude", type=float, help="degrees, east positive")
     place.add_argument("--date", help="YYYY-MM-DD of the first frame (local)")
     place.add_argument("--start-time", help="HH:MM[:SS] local time of the first frame")
-    place.add_argument("--utc-offset", type=float, default=0.0, help="hours, e.g. 2 for CEST")
+    place.add_argument("--utc-offset", type=float, default=None,
+                       help="hours, e.g. 2 for CEST (default: the scene's UTC Offset, "
+                            "else Sun Position's, else 0)")
     place.add_argument("--frame-seconds", type=float, help="seconds between frames")
+    place.add_argument("--fixed-latitude", action="store_true",
+                       help="the latitude is known exactly: fit only the time and north "
+                            "offsets (default: the latitude is fitted too, near the given one)")
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
@@ -71,38 +85,57 @@ def parse_frames(text, clip):
     return a, b
 
 
-def physical_inputs(args, context, frames):
-    """Place and time for physical smoothing, from the flags or from Blender's
-    Sun Position add-on (its latitude, longitude, date, time and UTC zone)."""
+def physical_inputs(args, context, options):
+    """Place and time for physical smoothing: the flags first, then what the
+    panel gave (`options`, filled by prepare_run), then Blender's Sun Position
+    add-on (its latitude, longitude, date, time and UTC zone). With the
+    frames' times known (a times file) only the place is needed."""
     import datetime as dt
     sp = getattr(context.scene, "sun_pos_properties", None)
-    lat = args.latitude if args.latitude is not None else getattr(sp, "latitude", None)
-    lon = args.longitude if args.longitude is not None else getattr(sp, "longitude", None)
-    utc = args.utc_offset if args.utc_offset else getattr(sp, "UTC_zone", 0.0)
+
+    def pick(flag, from_options, from_sun_position):
+        if flag is not None:
+            return flag
+        if from_options is not None:
+            return from_options
+        return getattr(sp, from_sun_position, None)
+    lat = pick(args.latitude, options.latitude_deg, "latitude")
+    lon = pick(args.longitude, options.longitude_deg, "longitude")
+    if options.frame_times is not None:
+        missing = [n for n, v in (("--latitude", lat), ("--longitude", lon)) if v is None]
+        if missing:
+            fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing))
+        return {"latitude_deg": lat, "longitude_deg": lon}
+    utc = args.utc_offset if args.utc_offset is not None else getattr(sp, "UTC_zone", 0.0)
+    first = options.first_time if not (args.date or args.start_time) else None
     try:
-        if args.date:
-            day = dt.date.fromisoformat(args.date)
-        elif sp is not None:
-            day = dt.date(sp.year, sp.month, sp.day)
-        else:
-            day = None
-        if args.start_time:
-            parts = [float(v) for v in args.start_time.split(":")]
-            hours = parts[0] + (parts[1] if len(parts) > 1 else 0) / 60 + \
-                (parts[2] if len(parts) > 2 else 0) / 3600
-        else:
-            hours = getattr(sp, "time", None)
+        if first is None:
+            if args.date:
+                day = dt.date.fromisoformat(args.date)
+            elif sp is not None:
+                day = dt.date(sp.year, sp.month, sp.day)
+            else:
+                day = None
+            if args.start_time:
+                parts = [float(v) for v in args.start_time.split(":")]
+                hours = parts[0] + (parts[1] if len(parts) > 1 else 0) / 60 + \
+                    (parts[2] if len(parts) > 2 else 0) / 3600
+            else:
+                hours = getattr(sp, "time", None)
+            if day is not None and hours is not None:
+                tz = dt.timezone(dt.timedelta(hours=utc))
+                first = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + \
+                    dt.timedelta(hours=hours)
     except ValueError as e:
         fail(EXIT_USAGE, f"bad --date or --start-time: {e}")
-    missing = [name for name, v in (("--latitude", lat), ("--longitude", lon), ("--date", day),
-                                    ("--start-time", hours), ("--frame-seconds", args.frame_seconds))
-               if v is None]
+    seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds
+    missing = [name for name, v in (("--latitude", lat), ("--longitude", lon),
+                                    ("--date and --start-time", first),
+                                    ("--frame-seconds", seconds)) if v is None]
     if missing:
         fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing) +
-             " (or Blender's Sun Position add-on values)")
-    tz = dt.timezone(dt.timedelta(hours=utc))
-    first = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
-    return {"first_time": first, "frame_seconds": args.frame_seconds,
+             " (or --times, or Blender's Sun Position add-on values)")
+    return {"first_time": first, "frame_seconds": seconds,
             "latitude_deg": lat, "longitude_deg": lon}
 
 
@@ -140,17 +173,19 @@ def _run(argv):
     except ValueError as e:
         fail(EXIT_USAGE, str(e))
 
-    physical = {}
-    if args.smoothing == "physical":
-        physical = physical_inputs(args, context, frames)
     if not hasattr(bpy.types.Scene, "sunlapse"):
         register()  # properties and operators, as in the UI
     try:
         scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
             context, collection=collection, ground=args.ground, frames=frames,
-            method=args.method, smoothing=args.smoothing)
-        for key, value in physical.items():
-            setattr(options, key, value)
+            method=args.method, smoothing=args.smoothing,
+            times_file=os.path.abspath(args.times) if args.times else None,
+            utc_offset=args.utc_offset)
+        if args.smoothing == "physical":
+            if args.fixed_latitude:
+                options.fit_latitude = False
+            for key, value in physical_inputs(args, context, options).items():
+                setattr(options, key, value)
         if args.initial_sun:
             z, a = args.initial_sun
             if not (0 <= z < 90):

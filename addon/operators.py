@@ -9,7 +9,7 @@ from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from . import ar, bridge, lamp, native_loader, pipeline, results
-from .core import trackfile
+from .core import frametimes, trackfile
 
 
 def ground_names(settings):
@@ -106,10 +106,24 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def load_frame_times(path, utc_offset_hours, clip, frames):
+    """{scene frame: aware datetime} for `frames` from a times CSV (its frame
+    column counts the clip's frames from 1); raises bridge.SceneError."""
+    try:
+        table = frametimes.read_times(path, utc_offset_hours)
+        clip_frames = [f - clip.frame_start + 1 for f in range(frames[0], frames[1] + 1)]
+        times = frametimes.times_for(table, clip_frames, path)
+    except frametimes.FrameTimesError as e:
+        raise bridge.SceneError(str(e))
+    return {f: t for f, t in zip(range(frames[0], frames[1] + 1), times)}
+
+
 def prepare_run(context, settings=None, collection=None, ground=None, frames=None,
-                method=None, smoothing=None):
+                method=None, smoothing=None, times_file=None, utc_offset=None):
     """Everything a run needs, gathered on the main thread (bpy reads only).
-    Returns (native scene, native camera, clip info, frame numbers, options)."""
+    Returns (native scene, native camera, clip info, frame numbers, options).
+    `times_file` / `utc_offset` override the panel's Frame Times and UTC
+    Offset."""
     settings = settings or context.scene.sunlapse
     native_loader.require()
     model, cam, clip = gather_all(context, settings, collection=collection)
@@ -132,6 +146,11 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
         north_offset_deg=bridge.scene_north_offset_deg(context), ground_object_ids=ids)
+    times_path = times_file if times_file is not None else (
+        settings.times_file and bpy.path.abspath(settings.times_file))
+    if times_path:
+        utc = utc_offset if utc_offset is not None else settings.utc_offset
+        options.frame_times = load_frame_times(times_path, utc, clip, frames)
     if options.smoothing == "physical":
         physical_from_settings(context, settings, options)
     for w in cam.warnings:
@@ -158,6 +177,10 @@ def physical_from_settings(context, settings, options):
     elif sp is not None:
         day = dt.date(sp.year, sp.month, sp.day)
         lat, lon, utc, hours = sp.latitude, sp.longitude, sp.UTC_zone, sp.time
+    options.fit_latitude = settings.fit_latitude
+    if options.frame_times is not None:  # the times file is the clock
+        options.latitude_deg, options.longitude_deg = lat, lon
+        return
     if day is None or settings.frame_seconds <= 0:
         return
     tz = dt.timezone(dt.timedelta(hours=utc))

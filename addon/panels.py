@@ -21,13 +21,16 @@ def draw_sun_panel(layout, context):
     col.prop(settings, "ground_objects")
     col.prop(settings, "method")
     col.prop(settings, "smoothing")
+    col.prop(settings, "times_file")
     if settings.smoothing == "physical":
         box = col.box()
         if getattr(context.scene, "sun_pos_properties", None) is not None and not settings.date:
             box.label(text="Place and time: Sun Position add-on", icon="INFO")
-        for name in ("latitude", "longitude", "date", "start_hour", "utc_offset"):
+        names = ("latitude", "fit_latitude", "longitude", "utc_offset") if settings.times_file \
+            else ("latitude", "fit_latitude", "longitude", "date", "start_hour", "utc_offset",
+                  "frame_seconds")
+        for name in names:
             box.prop(settings, name)
-        box.prop(settings, "frame_seconds")
     col.prop(settings, "ignore_top_rows")
     row = col.row(align=True)
     row.prop(settings, "use_frame_range", text="")

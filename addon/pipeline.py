@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
-from .core import smoothing, sunpath, trackfile
+from .core import frametimes, smoothing, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -27,6 +27,9 @@ REACQUIRE_AFTER = 2
 # Tracking confidence below this counts toward re-acquisition (steady
 # tracking scores 0.9 and more on the rendered presets).
 DOUBTFUL_CONFIDENCE = 0.5
+# Frames (in capture order) tried for a confident initial Sun before the run
+# settles for the best of them.
+ACQUIRE_TRIES = 8
 
 
 class PipelineError(Exception):
@@ -49,6 +52,14 @@ class RunOptions:
     frame_seconds: Optional[float] = None
     latitude_deg: Optional[float] = None
     longitude_deg: Optional[float] = None
+    # Capture time of each frame (scene frame number -> aware datetime), from
+    # a times file: frames are then visited in the order they were taken and
+    # smoothed over real time; physical smoothing needs no first_time or
+    # frame_seconds then.
+    frame_times: Optional[dict] = None
+    # Physical smoothing fits the latitude too (about the given one, loosely);
+    # False keeps the given latitude exactly (it is known, e.g. engraved).
+    fit_latitude: bool = True
 
 
 def _check_progress(progress, fraction):
@@ -77,6 +88,30 @@ def read_frame(path: str, index: int):
     if frame is None:
         raise PipelineError(f"frame {index + 1} of the clip cannot be decoded")
     return frame
+
+
+class _FrameSource:
+    """Frames of a clip by scene frame number, read with one seeking reader:
+    sequential reads cost nothing extra, out-of-order ones seek."""
+
+    def __init__(self, reader, clip_frame_start: int, next_index: int):
+        self.reader, self.start, self.next = reader, clip_frame_start, next_index
+        self.end = None  # first 0-based index past the clip's end, once known
+
+    def read(self, frame: int):
+        """uint8 BGR, or None when the frame cannot be decoded; raises
+        StopIteration when the clip has no such frame."""
+        i = frame - self.start
+        if self.end is not None and i >= self.end:
+            raise StopIteration
+        try:
+            if i != self.next and not self.reader.seek(i):
+                raise StopIteration
+            self.next = i + 1
+            return self.reader.read()
+        except StopIteration:
+            self.end = i if self.end is None else min(self.end, i)
+            raise
 
 
 def _gray(bgr, camera, method):
@@ -118,27 +153,31 @@ def _physical(native, track, numbers, raws, options, north):
     """Fits the Sun's path through the raw angles; returns (zenith, geographic
     azimuth, north offset) per frame, or (None, None, north) with the reason
     kept in the track when the inputs are missing or the fit fails."""
-    need = (options.first_time, options.frame_seconds, options.latitude_deg,
-            options.longitude_deg)
+    need = (options.latitude_deg, options.longitude_deg) + (
+        (options.first_time, options.frame_seconds) if options.frame_times is None else ())
     if any(v is None for v in need):
-        track.extra["smoothing_message"] = ("physical smoothing needs the first frame's time, "
-                                            "the seconds per frame and the place; used two_pass")
+        track.extra["smoothing_message"] = ("physical smoothing needs the place and the frames' "
+                                            "times (a times file, or the first frame's time "
+                                            "and the seconds per frame); used two_pass")
         track.method["smoothing"] = "two_pass"
         return None, None, north
-    times = sunpath.frame_times(options.first_time, options.frame_seconds, numbers)
+    times = sunpath.frame_times(options.first_time, options.frame_seconds, numbers) \
+        if options.frame_times is None else [options.frame_times[f] for f in numbers]
 
     def sun(t, lat, lon):
         return native.sun_position(t.year, t.month, t.day, t.hour, t.minute,
                                    t.second + t.microsecond * 1e-6, lat, lon)
     world_az = [None if r[2] is None else (r[2] + north) % 360.0 for r in raws]
     fit = sunpath.fit_sun_path(times, [r[1] for r in raws], world_az, [r[3] for r in raws], sun,
-                               options.latitude_deg, options.longitude_deg)
+                               options.latitude_deg, options.longitude_deg,
+                               fit_latitude=options.fit_latitude)
     if not fit.success:
         track.extra["smoothing_message"] = f"physical fit failed ({fit.message}); used two_pass"
         track.method["smoothing"] = "two_pass"
         return None, None, north
     track.extra["sun_path_fit"] = {
-        "latitude_deg": fit.latitude_deg, "longitude_deg": fit.longitude_deg,
+        "latitude_deg": fit.latitude_deg, "latitude_fitted": options.fit_latitude,
+        "longitude_deg": fit.longitude_deg,
         "time_offset_s": fit.time_offset_s, "north_offset_deg": fit.north_offset_deg,
         "median_residual_deg": fit.rms_deg, "message": fit.message or None}
     return fit.zenith_deg, fit.azimuth_deg, fit.north_offset_deg
@@ -198,44 +237,89 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         raise PipelineError("no ground object: name the ground the shadows fall on "
                             "(--ground, or Ground in the panel)")
     frames = list(frames)
-    reader = open_clip(clip_path, frames[0] - clip_frame_start)
-    try:
-        first_bgr = reader.read()
-    except StopIteration:
-        first_bgr = None
-    if first_bgr is None:
-        raise PipelineError(f"frame {frames[0]} of the clip cannot be decoded")
+    times = None
+    if options.frame_times is not None:
+        missing = [f for f in frames if f not in options.frame_times]
+        if missing:
+            raise PipelineError(f"the times file has no time for frame(s) "
+                                f"{', '.join(map(str, missing[:5]))}{' ...' if len(missing) > 5 else ''}")
+        times = [options.frame_times[f] for f in frames]
+    # Frames are visited in the order they were taken (decode order when the
+    # times are unknown): the tracker follows the shadow between neighbours
+    # in time, so an out-of-order frame is tracked where it belongs.
+    visit = [frames[i] for i in frametimes.chronological(frames, times)]
+    source = _FrameSource(open_clip(clip_path, visit[0] - clip_frame_start), clip_frame_start,
+                          visit[0] - clip_frame_start)
     north = options.north_offset_deg
     track = trackfile.Track(
         frame_start=clip_frame_start, north_offset_deg=north,
         method={"initial": options.method, "tracking": options.method,
                 "smoothing": options.smoothing,
                 "options": {"gamma": GAMMA[options.method]}})
+    if times is not None:
+        late = frametimes.out_of_order(frames, times)
+        track.extra["frame_times"] = {"first_utc": min(times).isoformat(),
+                                      "last_utc": max(times).isoformat(),
+                                      "out_of_order_frames": late}
 
     t0 = time.perf_counter()
-    first_gray = _gray(first_bgr, camera, options.method)
-    sub = None if progress is None else (lambda f: progress(0.1 * f))
-    if options.initial_sun is not None:
-        init = _given_initial(*options.initial_sun, north)
-        track.method["initial"] = "given"
-    else:
-        init = estimate_initial(scene, camera, first_bgr, options, sub, gray=first_gray)
-    # Shading alone may leave the Sun undetermined (flat ground, thin casters):
-    # then the Sun is searched for by its cast shadows (acquire.py).
     search = _ShadowSearchLazy(scene, camera, clip_path, clip_frame_start, frames, options)
-    if options.initial_sun is None and options.method != "thesis" and (
-            not init["success"] or init["confidence"] < DOUBTFUL_CONFIDENCE):
-        found = search.run(first_gray)
-        if found is not None:
-            init = found
-            track.method["initial"] = "shadow_search"
+    # The anchor: the first frame (in capture order) whose Sun is clear. The
+    # thesis starts on frame 1 whatever it shows; a dawn frame whose shadow
+    # has left the model, or a frame whose shading cannot tell the Sun, would
+    # send the tracker after the wrong shadow for the whole clip. So ours
+    # tries the next frames until one gives a confident Sun (shading, then
+    # the cast-shadow search), tracks forward from it, and then goes back
+    # from it to the frames before. The thesis mode and a given Sun anchor on
+    # the first frame.
+    tries = 1 if (options.method == "thesis" or options.initial_sun is not None) \
+        else min(ACQUIRE_TRIES, len(visit))
+    best = None  # (confidence, position, init, gray)
+    tried = []
+    for p in range(tries):
+        try:
+            bgr = source.read(visit[p])
+        except StopIteration:
+            bgr = None
+        if bgr is None:
+            tried.append({"frame": visit[p], "confidence": None, "message": "not decodable"})
+            continue
+        gray = _gray(bgr, camera, options.method)
+        sub = None if progress is None else (lambda f, p=p: progress(0.1 * (p + f) / tries))
+        if options.initial_sun is not None:
+            init = _given_initial(*options.initial_sun, north)
+            track.method["initial"] = "given"
+        else:
+            init = estimate_initial(scene, camera, bgr, options, sub, gray=gray)
+        # Shading alone may leave the Sun undetermined (flat ground, thin
+        # casters): then the Sun is searched for by its cast shadows.
+        if options.initial_sun is None and options.method != "thesis" and (
+                not init["success"] or init["confidence"] < DOUBTFUL_CONFIDENCE):
+            found = search.run(gray)
+            if found is not None:
+                init = found
+        conf = init["confidence"] if init["success"] else -1.0
+        tried.append({"frame": visit[p], "confidence": max(conf, 0.0),
+                      "message": init["message"] or None})
+        if best is None or conf > best[0]:
+            best = (conf, p, init, gray)
+        if conf >= DOUBTFUL_CONFIDENCE:
+            break
+    if best is None:
+        raise PipelineError(f"frame {visit[0]} of the clip cannot be decoded")
+    _, anchor, init, anchor_gray = best
+    if init["message"] and init["message"].startswith("found by its cast shadows"):
+        track.method["initial"] = "shadow_search"
+    if len(tried) > 1:
+        track.extra["initial_tries"] = tried
     if not init["success"]:
         reason = f"initial Sun failed: {init['message']}"
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
         track.extra["message"] = reason
         return track
     az0 = (init["azimuth_deg"] - north) % 360.0
-    track.initial = {"zenith_deg": init["zenith_deg"], "azimuth_deg": az0,
+    track.initial = {"frame": visit[anchor], "zenith_deg": init["zenith_deg"],
+                     "azimuth_deg": az0,
                      "residual": init["residual_rms"], "confidence": init["confidence"],
                      "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
                      "ambient_intensity": init["ambient_intensity"],
@@ -247,25 +331,24 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     else:
         tracker = native.ShadowTracker(scene, camera, options.ground_object_ids,
                                        ignore_top_rows=options.ignore_top_rows)
-    first = tracker.initialize(first_gray, init["sun_in_world"])
-    raws = [(frames[0], init["zenith_deg"], az0, init["confidence"], None, first)]
+    first = tracker.initialize(anchor_gray, init["sun_in_world"])
+    raws = [(visit[anchor], init["zenith_deg"], az0, init["confidence"], None, first)]
     if not first.ok:
         raws[0] = raws[0][:4] + (None, first)
         track.extra["tracking_message"] = first.reason
     track_seconds = 0.0
-    ended = None
     lost = 0
     reacquired = []
-    for k, f in enumerate(frames[1:], start=1):
-        _check_progress(progress, 0.1 + 0.85 * k / len(frames))
-        if ended is None:
-            try:
-                bgr = reader.read()
-            except StopIteration:
-                ended = f
-        if ended is not None:
+
+    def step(f):
+        """Tracks frame f from the tracker's last frame; appends to raws."""
+        nonlocal lost, track_seconds
+        _check_progress(progress, 0.1 + 0.85 * len(raws) / len(frames))
+        try:
+            bgr = source.read(f)
+        except StopIteration:
             raws.append((f, None, None, 0.0, "the clip ended before this frame", None))
-            continue
+            return
         gray = None if bgr is None else _gray(bgr, camera, options.method)
         r = tracker.track(gray)
         track_seconds += r.seconds
@@ -284,14 +367,22 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
                 if first.ok:
                     reacquired.append(f)
                     lost = 0
-                    r = first
                     r_z, r_a = again["zenith_deg"], again["azimuth_deg"]
-                    raws.append((f, r_z, (r_a - north) % 360.0, again["confidence"], None, r))
-                    continue
+                    raws.append((f, r_z, (r_a - north) % 360.0, again["confidence"], None, first))
+                    return
         if r.ok:
             raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
         else:
             raws.append((f, None, None, 0.0, r.reason, r))
+
+    for f in visit[anchor + 1:]:          # forward in time from the anchor
+        step(f)
+    if anchor > 0:                         # then back in time from it
+        tracker.initialize(anchor_gray, init["sun_in_world"])
+        lost = 0
+        for f in reversed(visit[:anchor]):
+            step(f)
+    raws.sort(key=lambda r: r[0])  # back to frame order for smoothing and the file
 
     _check_progress(progress, 0.97)
     numbers = [r[0] for r in raws]
@@ -309,11 +400,13 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         zs, azs = smoothing.smooth_angles(
             numbers, [r[1] for r in raws], [r[2] for r in raws], [r[3] for r in raws],
-            mode, degree=TWO_PASS_DEGREE[options.method])
-    for (f, z, a, conf, reason, res), zs_f, as_f in zip(raws, zs, azs):
+            mode, degree=TWO_PASS_DEGREE[options.method],
+            times_s=None if times is None else frametimes.seconds_since(times))
+    for k, ((f, z, a, conf, reason, res), zs_f, as_f) in enumerate(zip(raws, zs, azs)):
         est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,
                                       raw_zenith_deg=z, raw_azimuth_deg=a,
-                                      confidence=conf, reason=reason)
+                                      confidence=conf, reason=reason,
+                                      time_utc=None if times is None else times[k].isoformat())
         if res is not None and res.shadow_end_px[0] == res.shadow_end_px[0]:  # not NaN
             est.shadow_start_px = list(res.shadow_start_px)
             est.shadow_end_px = list(res.shadow_end_px)

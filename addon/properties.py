@@ -53,8 +53,17 @@ class SunlapseSettings(bpy.types.PropertyGroup):
                               description="Local time of the first frame, hours")
     utc_offset: FloatProperty(name="UTC Offset", min=-14, max=14, default=0.0,
                               description="Hours between local time and UTC")
+    fit_latitude: BoolProperty(
+        name="Fit Latitude", default=True,
+        description="Physical smoothing also fits the latitude near the given one; off: "
+                    "the latitude is known exactly")
     frame_seconds: FloatProperty(name="Seconds per Frame", min=0, default=0.0,
                                  description="Time between two frames of the time-lapse")
+    times_file: StringProperty(
+        name="Frame Times", subtype="FILE_PATH", default="",
+        description="CSV with each frame's capture time (columns frame, local_time; local "
+                    "times use the UTC offset): frames are tracked in the order they were "
+                    "taken and smoothed over real time. Empty: evenly spaced frames")
     use_frame_range: BoolProperty(
         name="Frame Range", default=False,
         description="Estimate only these frames (default: the whole clip)")

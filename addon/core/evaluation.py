@@ -83,7 +83,9 @@ def evaluate(name: str, track: Optional[Track], truth: Track,
     report.zenith, report.azimuth, report.direction = Stats.of(dz), Stats.of(da), Stats.of(dd)
     init = track.initial or {}
     if init.get("zenith_deg") is not None and init.get("azimuth_deg") is not None and truth.frames:
-        first = truth.frames[0]
+        # The initial Sun's own frame (a run may anchor past frame 1).
+        first = truth.frame(init["frame"]) if init.get("frame") is not None else None
+        first = first if first is not None and first.has_estimate else truth.frames[0]
         report.initial_error_deg = angle_between_deg(
             direction(init["zenith_deg"], init["azimuth_deg"] + track.north_offset_deg),
             direction(first.zenith_deg, first.azimuth_deg + truth.north_offset_deg))

@@ -50,7 +50,7 @@ def online(frames, values, weights=None, alpha=0.3, window=15):
         if s is None:
             out.append(None)
             continue
-        if len(hist_t) >= 3:
+        if len(hist_t) >= 3 and np.ptp(hist_t) > 0:
             slope, icpt = np.polyfit(hist_t, hist_s, 1)
             # Exponential smoothing lags by (1-alpha)/alpha samples on a ramp.
             lag = (1 - alpha) / alpha
@@ -85,16 +85,34 @@ def two_pass(frames, values, weights=None, degree=1, iterations=6):
     return [float(y) for y in np.polyval(coef, x)]
 
 
-def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, **kw):
-    """Smooths zenith and azimuth together; returns (zenith list, azimuth list)."""
-    az = unwrap_deg(azimuth)
+def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None, **kw):
+    """Smooths zenith and azimuth together; returns (zenith list, azimuth list).
+
+    `times_s` (seconds, one per frame), when the capture times are known,
+    replaces the frame numbers as the time axis: the fit then follows real
+    time through irregular steps and repeated captures, and frames are taken
+    in the order they were shot (an out-of-order frame is smoothed where it
+    belongs; the online mode is causal in capture time)."""
+    n = len(frames)
+    if times_s is not None and len(times_s) != n:
+        raise ValueError(f"{len(times_s)} times for {n} frames")
+    order = list(range(n)) if times_s is None else \
+        sorted(range(n), key=lambda i: (times_s[i], frames[i]))
+    x = [frames[i] if times_s is None else times_s[i] for i in order]
+    z_in = [zenith[i] for i in order]
+    a_in = [azimuth[i] for i in order]
+    w_in = None if weights is None else [weights[i] for i in order]
+    az = unwrap_deg(a_in)
     if mode == "online":
-        z_s = online(frames, zenith, weights, **kw)
-        a_s = online(frames, list(az), weights, **kw)
+        z_s = online(x, z_in, w_in, **kw)
+        a_s = online(x, list(az), w_in, **kw)
     elif mode == "two_pass":
-        z_s = two_pass(frames, zenith, weights, degree=degree)
-        a_s = two_pass(frames, list(az), weights, degree=degree)
+        z_s = two_pass(x, z_in, w_in, degree=degree)
+        a_s = two_pass(x, list(az), w_in, degree=degree)
     else:
         raise ValueError(f"smoothing mode {mode!r} is not one of online, two_pass")
-    a_s = [None if a is None else a % 360.0 for a in a_s]
-    return z_s, a_s
+    z_out, a_out = [None] * n, [None] * n
+    for k, i in enumerate(order):
+        z_out[i] = z_s[k]
+        a_out[i] = None if a_s[k] is None else a_s[k] % 360.0
+    return z_out, a_out

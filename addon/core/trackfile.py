@@ -37,6 +37,8 @@ class FrameEstimate:
     reason: Optional[str] = None
     # Sun / ambient light on the ground (from the shadow fit); optional.
     sun_ambient_ratio: Optional[float] = None
+    # Capture time (ISO 8601, UTC) when the run was given the frames' times.
+    time_utc: Optional[str] = None
 
     @property
     def has_estimate(self) -> bool:
@@ -78,6 +80,8 @@ def _frame_to_json(f: FrameEstimate) -> Dict[str, Any]:
         "raw_azimuth_deg": _num(f.raw_azimuth_deg),
         "confidence": float(f.confidence),
     }
+    if f.time_utc is not None:
+        d["time_utc"] = str(f.time_utc)
     if f.sun_ambient_ratio is not None:
         d["sun_ambient_ratio"] = float(f.sun_ambient_ratio)
     if f.shadow_start_px is not None and f.shadow_end_px is not None:
@@ -165,6 +169,7 @@ def from_json(d: Dict[str, Any], source: str = "<track>") -> Track:
                 shadow_end_px=shadow.get("end_px"),
                 reason=fd.get("reason"),
                 sun_ambient_ratio=_num(fd.get("sun_ambient_ratio")),
+                time_utc=fd.get("time_utc"),
             ))
         except (KeyError, TypeError, ValueError) as e:
             raise TrackFileError(f"{source}: frame entry {i} is malformed: {e}")

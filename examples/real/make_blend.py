@@ -3,15 +3,16 @@ mark the dial's known points as tracking markers named with their ground
 coordinates, run "Solve Camera from Marked Points", model the dial.
 
   blender -b --factory-startup --python-exit-code 1 --python examples/real/make_blend.py -- \
-      CLIP MARKS.json OUT.blend --date YYYY-MM-DD --start-time HH:MM
+      CLIP MARKS.json OUT.blend --date YYYY-MM-DD --start-time HH:MM [--times TIMES.csv]
 
 MARKS comes from measure_dial.py. Units: the nodus height h = 1 (the real
 height is unknown and no angle depends on it). The model is the plate (a
 plane; the paving around it is a few centimetres lower, which the plane
 ignores), the gnomon as a thin vertical post at the origin and the nodus
 ball on its top; its radius (0.13 h) was read from the ball's image.
-The clip is stored with a path relative to the .blend, so the .blend finds
-the footage in ../shared/real/ beside the project's work tree without a copy.
+The clip (and the frames' times file, the panel's Frame Times) is stored
+with a path relative to the .blend, so the .blend finds the footage in
+../shared/real/ beside the project's work tree without a copy.
 """
 import json
 import math
@@ -38,6 +39,7 @@ def parse(argv):
     p.add_argument("--date", required=True)
     p.add_argument("--start-time", required=True)
     p.add_argument("--utc-offset", type=float, default=1.0)
+    p.add_argument("--times", help="CSV of each frame's local time (frame,local_time)")
     return p.parse_args(argv)
 
 
@@ -111,6 +113,9 @@ def main():
     hh, mm = (int(v) for v in args.start_time.split(":"))
     s.start_hour = hh + mm / 60.0
     s.utc_offset = args.utc_offset
+    if args.times:
+        out_dir = os.path.dirname(os.path.abspath(args.out))
+        s.times_file = "//" + os.path.relpath(os.path.abspath(args.times), out_dir)
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.out), relative_remap=True,
                                 compress=True)

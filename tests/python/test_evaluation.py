@@ -73,3 +73,13 @@ def test_plot_is_written(tmp_path):
     r = ev.evaluate("s", as_track(truth(), dz=1.0), truth())
     out = ev.plot(r, str(tmp_path / "s.png"))
     assert out and (tmp_path / "s.png").stat().st_size > 1000
+
+
+def test_initial_sun_is_scored_on_its_own_frame():
+    t = truth()
+    tr = as_track(t)
+    f4 = tr.frames[3]
+    tr.initial = {"frame": 4, "zenith_deg": f4.zenith_deg, "azimuth_deg": f4.azimuth_deg}
+    assert ev.evaluate("s", tr, t).initial_error_deg == pytest.approx(0, abs=1e-5)
+    tr.initial.pop("frame")  # without a frame: frame 1's Sun, 3 deg of zenith away
+    assert ev.evaluate("s", tr, t).initial_error_deg > 2.5

@@ -68,3 +68,53 @@ def test_nothing_estimated_gives_none():
 def test_unknown_mode_is_an_error():
     with pytest.raises(ValueError, match="smoothing mode"):
         smoothing.smooth_angles([1], [1.0], [1.0], [1.0], "spline")
+
+
+def irregular_path(seed=3):
+    """A Sun path sampled at irregular capture times (repeats, gaps, and the
+    evening's last capture stored first), like the real sundial clips."""
+    rng = np.random.default_rng(seed)
+    steps = rng.choice([900.0, 1200.0, 1800.0, 2400.0], size=39)
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    t = np.repeat(t, 3)                         # each capture held 3 frames
+    t = np.concatenate([[t[-1] + 600.0], t])    # out of order: the last first
+    x = t / t.max()
+    zen = 75 - 40 * x + 30 * x * x
+    azi = 120 + 120 * x
+    zn = list(zen + rng.normal(0, 0.4, len(t)))
+    an = list(azi + rng.normal(0, 0.4, len(t)))
+    return list(range(1, len(t) + 1)), list(t), zen, azi, zn, an
+
+
+def test_two_pass_over_capture_times_follows_irregular_steps():
+    frames, t, zen, azi, zn, an = irregular_path()
+    w = [1.0] * len(frames)
+    z, a = smoothing.smooth_angles(frames, zn, an, w, "two_pass", degree=3, times_s=t)
+    assert np.mean(np.abs(np.array(z) - zen)) < 0.2 and np.max(np.abs(np.array(z) - zen)) < 0.6
+    assert np.max(az_err(a, azi)) < 0.6
+    # Over frame numbers the same samples fit worse: the first frame (taken
+    # last) and the irregular steps bend the curve.
+    z_f, _ = smoothing.smooth_angles(frames, zn, an, w, "two_pass", degree=3)
+    assert np.max(np.abs(np.array(z_f) - zen)) > 2 * np.max(np.abs(np.array(z) - zen))
+
+
+def test_online_over_capture_times_is_causal_in_time():
+    frames, t, zen, azi, zn, an = irregular_path(seed=4)
+    w = [1.0] * len(frames)
+    z, _ = smoothing.smooth_angles(frames, zn, an, w, "online", times_s=t)
+    # The out-of-order first frame is smoothed where it belongs (at the end
+    # of the day), not as the first sample.
+    assert abs(z[0] - zen[0]) < 1.5
+    # Changing the last capture changes nothing before it in time.
+    zn2 = list(zn)
+    zn2[0] = 5.0
+    z2, _ = smoothing.smooth_angles(frames, zn2, an, w, "online", times_s=t)
+    assert z2[1:] == z[1:]
+    # Repeated captures (equal times) are fine: no degenerate regression.
+    assert all(v is not None and np.isfinite(v) for v in z)
+    assert np.mean(np.abs(np.array(z[10:]) - zen[10:])) < 1.0
+
+
+def test_times_must_match_frames():
+    with pytest.raises(ValueError, match="times"):
+        smoothing.smooth_angles([1, 2], [1.0, 2.0], [1.0, 2.0], None, "two_pass", times_s=[0.0])

@@ -14,7 +14,8 @@ def sample_track():
         frames=[
             tf.FrameEstimate(frame=5, zenith_deg=40.0, azimuth_deg=170.0,
                              raw_zenith_deg=40.2, raw_azimuth_deg=169.0, confidence=0.9,
-                             shadow_start_px=[10, 20], shadow_end_px=[30, 40]),
+                             shadow_start_px=[10, 20], shadow_end_px=[30, 40],
+                             time_utc="2005-03-21T07:06:00+00:00"),
             tf.FrameEstimate(frame=6, reason="frame is black"),
         ],
         extra={"future_key": {"a": 1}})
@@ -27,6 +28,8 @@ def test_round_trip_keeps_everything(tmp_path):
     assert back.frame_start == 5 and back.north_offset_deg == 12.5
     assert back.frames[0].raw_azimuth_deg == 169.0
     assert back.frames[0].shadow_end_px == [30, 40]
+    assert back.frames[0].time_utc == "2005-03-21T07:06:00+00:00"
+    assert back.frames[1].time_utc is None
     assert back.frames[1].zenith_deg is None and back.frames[1].reason == "frame is black"
     assert back.extra == {"future_key": {"a": 1}}
     assert back.initial["azimuth_deg"] == 170.0

@@ -1,0 +1,112 @@
+"""Per-frame capture times of a time-lapse (the "times file").
+
+Time-lapse cameras rarely shoot at a fixed rate: captures get skipped,
+repeated (the same image held for several video frames) or, as in the March
+sundial clip, stored out of order. When the user knows each frame's time, a
+CSV file gives it, one row per frame:
+
+    frame,local_time
+    1,2005-03-21 18:08
+    2,2005-03-21 08:06
+
+`frame` is the clip's frame number (1 = the clip's first frame, decode order,
+the clip's own numbering, not the scene's); the time column (named
+`local_time`, `time` or `utc_time`) is `YYYY-MM-DD HH:MM[:SS]` in local time
+(the UTC offset is given separately) or ISO 8601 with its own offset
+(`2005-03-21T08:06:00+01:00`). `utc_time` columns are read as UTC.
+
+The pipeline uses the times to visit frames in the order they were taken,
+to smooth over real time instead of frame numbers and, for physical
+smoothing, as the clock of each frame. bpy-free.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+from typing import Dict, List, Optional, Sequence
+
+TIME_COLUMNS = ("local_time", "time", "utc_time")
+
+
+class FrameTimesError(ValueError):
+    """A times file that cannot be used: says which file, line and why."""
+
+
+def parse_time(text: str, tz: dt.tzinfo) -> dt.datetime:
+    """An aware datetime from 'YYYY-MM-DD HH:MM[:SS]' (in `tz`) or ISO 8601
+    with an offset (kept)."""
+    text = text.strip()
+    try:
+        t = dt.datetime.fromisoformat(text.replace(" ", "T", 1) if "T" not in text else text)
+    except ValueError:
+        raise ValueError(f"'{text}' is not a date and time (YYYY-MM-DD HH:MM[:SS])")
+    return t if t.tzinfo is not None else t.replace(tzinfo=tz)
+
+
+def read_times(path: str, utc_offset_hours: float = 0.0) -> Dict[int, dt.datetime]:
+    """{clip frame number: aware UTC datetime} from a times CSV."""
+    try:
+        fh = open(path, newline="", encoding="utf-8")
+    except FileNotFoundError:
+        raise FrameTimesError(f"times file {path}: no such file")
+    except OSError as e:
+        raise FrameTimesError(f"times file {path}: cannot be read ({e.strerror})")
+    with fh:
+        reader = csv.DictReader(fh)
+        fields = [f.strip() for f in (reader.fieldnames or [])]
+        reader.fieldnames = fields
+        column = next((c for c in TIME_COLUMNS if c in fields), None)
+        if "frame" not in fields or column is None:
+            raise FrameTimesError(f"times file {path}: needs a header with 'frame' and one of "
+                                  f"{', '.join(TIME_COLUMNS)} (found: {', '.join(fields) or 'none'})")
+        tz = dt.timezone.utc if column == "utc_time" else \
+            dt.timezone(dt.timedelta(hours=utc_offset_hours))
+        table: Dict[int, dt.datetime] = {}
+        for row in reader:
+            line = reader.line_num
+            if not any((v or "").strip() for v in row.values() if isinstance(v, str)):
+                continue  # blank line
+            try:
+                frame = int(str(row["frame"]).strip())
+                when = parse_time(str(row[column] or ""), tz)
+            except (ValueError, TypeError) as e:
+                raise FrameTimesError(f"times file {path}, line {line}: {e}")
+            if frame in table:
+                raise FrameTimesError(f"times file {path}, line {line}: frame {frame} "
+                                      f"is listed twice")
+            table[frame] = when.astimezone(dt.timezone.utc)
+    if not table:
+        raise FrameTimesError(f"times file {path}: no frames listed")
+    return table
+
+
+def times_for(table: Dict[int, dt.datetime], clip_frames: Sequence[int],
+              path: str = "times file") -> List[dt.datetime]:
+    """The time of each of `clip_frames` (clip numbering); every one must be
+    listed, else FrameTimesError names the first missing ones."""
+    missing = [f for f in clip_frames if f not in table]
+    if missing:
+        shown = ", ".join(str(f) for f in missing[:5]) + (" ..." if len(missing) > 5 else "")
+        raise FrameTimesError(f"{path} has no time for clip frame(s) {shown}")
+    return [table[f] for f in clip_frames]
+
+
+def chronological(frames: Sequence[int], times: Optional[Sequence[dt.datetime]]) -> List[int]:
+    """Positions 0..n-1 of `frames` in the order they were taken (ties keep
+    the frame order); the frame order itself when the times are unknown."""
+    n = len(frames)
+    if times is None:
+        return list(range(n))
+    return sorted(range(n), key=lambda i: (times[i], frames[i]))
+
+
+def seconds_since(times: Sequence[dt.datetime]) -> List[float]:
+    """Seconds of each time after the earliest."""
+    t0 = min(times)
+    return [(t - t0).total_seconds() for t in times]
+
+
+def out_of_order(frames: Sequence[int], times: Sequence[dt.datetime]) -> List[int]:
+    """Frames taken before the frame decoded just ahead of them."""
+    return [frames[i] for i in range(1, len(frames)) if times[i] < times[i - 1]]
