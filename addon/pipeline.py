@@ -27,6 +27,12 @@ REACQUIRE_AFTER = 2
 # Tracking confidence below this counts toward re-acquisition (steady
 # tracking scores 0.9 and more on the rendered presets).
 DOUBTFUL_CONFIDENCE = 0.5
+# A re-acquisition that finds the Sun within this of the tracker's own
+# (doubtful) answer confirms the tracker: the threshold above then doubles
+# (up to REACQUIRE_MAX), so glare that keeps the confidence low for hours
+# does not cost a search every other frame. A confident frame resets it.
+REACQUIRE_AGREE_DEG = 2.0
+REACQUIRE_MAX = 64
 # Frames (in capture order) tried for a confident initial Sun before the run
 # settles for the best of them.
 ACQUIRE_TRIES = 8
@@ -181,6 +187,14 @@ def _physical(native, track, numbers, raws, options, north):
         "time_offset_s": fit.time_offset_s, "north_offset_deg": fit.north_offset_deg,
         "median_residual_deg": fit.rms_deg, "message": fit.message or None}
     return fit.zenith_deg, fit.azimuth_deg, fit.north_offset_deg
+
+
+def _angle_deg(u, v) -> float:
+    import math
+    dot = sum(a * b for a, b in zip(u, v))
+    nu = math.sqrt(sum(a * a for a in u))
+    nv = math.sqrt(sum(b * b for b in v))
+    return math.degrees(math.acos(max(-1.0, min(1.0, dot / (nu * nv)))))
 
 
 class _ShadowSearchLazy:
@@ -338,11 +352,12 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         track.extra["tracking_message"] = first.reason
     track_seconds = 0.0
     lost = 0
+    reacquire_after = REACQUIRE_AFTER
     reacquired = []
 
     def step(f):
         """Tracks frame f from the tracker's last frame; appends to raws."""
-        nonlocal lost, track_seconds
+        nonlocal lost, track_seconds, reacquire_after
         _check_progress(progress, 0.1 + 0.85 * len(raws) / len(frames))
         try:
             bgr = source.read(f)
@@ -354,15 +369,19 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         track_seconds += r.seconds
         doubtful = not r.ok or r.confidence < DOUBTFUL_CONFIDENCE
         lost = lost + 1 if doubtful else 0
+        if not doubtful:
+            reacquire_after = REACQUIRE_AFTER
         # Lost, or barely holding on, on frames that do show the scene (not
         # black or undecodable): the Sun has left the tracker's reach (a jump
         # in the clip, a bad start). Find it again from scratch and start over.
-        if (lost >= REACQUIRE_AFTER and gray is not None and options.method != "thesis"
+        if (lost >= reacquire_after and gray is not None and options.method != "thesis"
                 and (r.ok or r.reason.startswith(("shadow lost", "no cast shadow")))):
             again = estimate_initial(scene, camera, bgr, options, gray=gray)
             if not again["success"] or again["confidence"] <= 0.3:
                 again = search.run(gray) or again
             if again["success"] and again["confidence"] > 0.3:
+                if r.ok and _angle_deg(again["sun_in_world"], r.sun_in_world) < REACQUIRE_AGREE_DEG:
+                    reacquire_after = min(2 * reacquire_after, REACQUIRE_MAX)
                 first = tracker.initialize(gray, again["sun_in_world"])
                 if first.ok:
                     reacquired.append(f)

@@ -49,17 +49,22 @@ int main() {
   const long rss0 = RssKb();
   double total = 0, worst_ms = 0, worst_err = 0;
   int band = 0;
+  double rays = 0, evals = 0;
   for (int f = 1; f < n; ++f) {
     const TrackedFrame r = tracker.Track(frames[f]);
     total += r.seconds;
     worst_ms = std::max(worst_ms, 1000 * r.seconds);
     worst_err = std::max(worst_err, testing::AngleDeg(r.sun_in_world, sun(f)));
     band = r.band_pixels;
+    rays += r.rays;
+    evals += r.evaluations;
   }
   std::printf("tracking_init: %.3f s (ground map and albedo, once per clip)\n", first.seconds);
   std::printf("tracking: 1920x1080, %.2f ms/frame mean, %.2f ms worst, %d band pixels, "
               "max error %.3f deg\n",
               1000 * total / (n - 1), worst_ms, band, worst_err);
+  std::printf("tracking_cost: %.0f shadow rays, %.1f candidate Suns scored per frame\n",
+              rays / (n - 1), evals / (n - 1));
   std::printf("tracking_memory: %ld kB resident after init, %+ld kB over %d frames\n", rss0,
               RssKb() - rss0, n - 1);
   return 0;

@@ -120,6 +120,8 @@ void BindEstimate(py::module_& m) {
       .def_readonly("confidence", &TrackedFrame::confidence)
       .def_readonly("contrast", &TrackedFrame::contrast)
       .def_readonly("band_pixels", &TrackedFrame::band_pixels)
+      .def_readonly("rays", &TrackedFrame::rays)
+      .def_readonly("evaluations", &TrackedFrame::evaluations)
       .def_readonly("shadow_start_px", &TrackedFrame::shadow_start_px)
       .def_readonly("shadow_end_px", &TrackedFrame::shadow_end_px)
       .def_readonly("seconds", &TrackedFrame::seconds);

@@ -76,6 +76,7 @@ struct ShadowTracker::Impl {
   std::vector<Eigen::Vector3f> band_normal;
   std::vector<uint8_t> occluded;
   AffineFit fit;
+  int64_t rays_cast = 0, evaluations = 0;  // counters of the current frame
 
   Impl(const Scene& s, const Camera& c, const ShadowTrackerOptions& opt)
       : scene(s), camera(c), o(opt), W(c.width()), H(c.height()) {}
@@ -138,6 +139,7 @@ struct ShadowTracker::Impl {
     }
     std::vector<uint8_t> occ(ids.size());
     scene.OccludedToward(static_cast<int64_t>(ids.size()), org.data(), d, 0.f, kInf, occ.data());
+    rays_cast += static_cast<int64_t>(ids.size());
     for (auto& v : occ) v = !v;
     return occ;
   }
@@ -246,6 +248,8 @@ struct ShadowTracker::Impl {
     const Eigen::Vector3f d = toward_sun.cast<float>();
     const int rays = static_cast<int>(band_normal.size());
     scene.OccludedToward(rays, band_origin.data(), d, 0.f, kInf, occluded.data());
+    rays_cast += rays;
+    ++evaluations;
     const int per_pixel = o.subsamples * o.subsamples;
     for (size_t i = 0; i < band_x.size(); ++i) {
       float sum = 0;
@@ -417,8 +421,11 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
       pred = Eigen::AngleAxisd(angle * (1 + s.lost), axis.normalized()) * s.sun;
     }
   }
+  s.rays_cast = s.evaluations = 0;
   auto finish = [&](const Eigen::Vector3d& d) {
     s.Describe(d, &out);
+    out.rays = static_cast<int>(s.rays_cast);
+    out.evaluations = static_cast<int>(s.evaluations);
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
   };

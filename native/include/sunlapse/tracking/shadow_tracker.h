@@ -69,6 +69,8 @@ struct TrackedFrame {
   double confidence = 0.0;   // 0..1
   double contrast = 0.0;     // fitted sun / ambient on the ground band
   int band_pixels = 0;
+  int rays = 0;              // shadow rays cast this frame (the tracker's cost)
+  int evaluations = 0;       // candidate Suns scored this frame
   // The longest modelled shadow on this frame: caster foot and shadow tip, in
   // OpenCV pixels (NaN when no caster's shadow falls in view).
   Eigen::Vector2d shadow_start_px{NAN, NAN};
