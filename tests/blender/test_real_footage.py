@@ -24,6 +24,8 @@ def test_example_blend_points_at_the_footage(empty_scene):
     assert os.path.exists(bpy.path.abspath(clip.filepath))
     assert clip.size[0] == 320 and clip.size[1] == 240
     assert bpy.context.scene.sunlapse.ignore_top_rows == 16
+    times = bpy.context.scene.sunlapse.times_file  # the frames' stamps, also relative
+    assert times.startswith("//") and os.path.exists(bpy.path.abspath(times))
 
 
 def test_march_clip_follows_the_ephemeris(tmp_path, native):
@@ -45,3 +47,24 @@ def test_march_clip_follows_the_ephemeris(tmp_path, native):
     # own +2-3.6 deg bias, see README); bounds leave room, not the targets.
     assert r.azimuth.mean < 1.5 and r.azimuth.max < 3.0
     assert r.zenith.mean < 4.0
+    # Frame 1 (18:08) is stored first but taken last: tracked in capture
+    # order, the run does not start on it.
+    assert track.extra["frame_times"]["out_of_order_frames"] == [2]
+    assert track.initial["frame"] != 1
+
+
+def test_march_clip_physical_smoothing_meets_the_target(tmp_path, native):
+    sys.path.insert(0, os.path.join(ROOT, "bench"))
+    import real
+    from sunlapse.core import evaluation, trackfile
+    out = str(tmp_path / "mar.phys.sun.json")
+    assert real.run_clip(BLEND, out, "physical", out + ".log") == 0, open(out + ".log").read()[-2000:]
+    track = trackfile.read_track(out)
+    assert track.method["smoothing"] == "physical"
+    truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),
+                             native.sun_position)
+    r = evaluation.evaluate("march", real.geographic(track), truth)
+    # Measured 1.88 / 3.04 zenith, 1.81 / 3.33 azimuth (mean / max).
+    assert r.frames_estimated == 40
+    assert r.zenith.mean < 2.0 and r.azimuth.mean < 2.0
+    assert r.zenith.max < 5.0 and r.azimuth.max < 5.0
