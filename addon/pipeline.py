@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
-from .core import frametimes, smoothing, sunpath, trackfile
+from .core import evaluation, frametimes, smoothing, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -189,14 +189,6 @@ def _physical(native, track, numbers, raws, options, north):
     return fit.zenith_deg, fit.azimuth_deg, fit.north_offset_deg
 
 
-def _angle_deg(u, v) -> float:
-    import math
-    dot = sum(a * b for a, b in zip(u, v))
-    nu = math.sqrt(sum(a * a for a in u))
-    nv = math.sqrt(sum(b * b for b in v))
-    return math.degrees(math.acos(max(-1.0, min(1.0, dot / (nu * nv)))))
-
-
 class _ShadowSearchLazy:
     """acquire.ShadowSearch with its background, built on first use only."""
 
@@ -234,7 +226,8 @@ class _ShadowSearchLazy:
         r = self.search.search(gray, self.back)
         if r["sun_in_world"] is None or r["message"]:
             return None
-        return {"success": True, "zenith_deg": r["zenith_deg"], "azimuth_deg": r["azimuth_deg"],
+        return {"success": True, "source": "shadow_search",
+                "zenith_deg": r["zenith_deg"], "azimuth_deg": r["azimuth_deg"],
                 "sun_in_world": r["sun_in_world"], "confidence": r["precision"],
                 "residual_rms": None, "spread_deg": None, "sun_intensity": None,
                 "ambient_intensity": None, "seconds": r["seconds"],
@@ -322,7 +315,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     if best is None:
         raise PipelineError(f"frame {visit[0]} of the clip cannot be decoded")
     _, anchor, init, anchor_gray = best
-    if init["message"] and init["message"].startswith("found by its cast shadows"):
+    if init.get("source") == "shadow_search":
         track.method["initial"] = "shadow_search"
     if len(tried) > 1:
         track.extra["initial_tries"] = tried
@@ -380,7 +373,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
             if not again["success"] or again["confidence"] <= 0.3:
                 again = search.run(gray) or again
             if again["success"] and again["confidence"] > 0.3:
-                if r.ok and _angle_deg(again["sun_in_world"], r.sun_in_world) < REACQUIRE_AGREE_DEG:
+                if r.ok and evaluation.angle_between_deg(again["sun_in_world"], r.sun_in_world) < REACQUIRE_AGREE_DEG:
                     reacquire_after = min(2 * reacquire_after, REACQUIRE_MAX)
                 first = tracker.initialize(gray, again["sun_in_world"])
                 if first.ok:

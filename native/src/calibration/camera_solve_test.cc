@@ -5,23 +5,12 @@
 #include <random>
 
 #include "sunlapse/scene/camera.h"
+#include "synthetic.h"
 
 namespace sunlapse {
 namespace {
 
-Camera Truth() {
-  BlenderCameraParams p;
-  p.width = 320;
-  p.height = 240;
-  p.lens_mm = 30;
-  const Eigen::Vector3d eye(0.3, -4.0, 3.0), back = (eye - Eigen::Vector3d(0, 0.5, 0)).normalized();
-  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
-  p.world_from_camera_local.block<3, 1>(0, 0) = right;
-  p.world_from_camera_local.block<3, 1>(0, 1) = back.cross(right);
-  p.world_from_camera_local.block<3, 1>(0, 2) = back;
-  p.world_from_camera_local.block<3, 1>(0, 3) = eye;
-  return Camera::FromBlender(p);
-}
+Camera Truth() { return testing::LookAt({0.3, -4.0, 3.0}, {0, 0.5, 0}, 320, 240, 30); }
 
 void Marks(const Camera& cam, double noise, std::vector<Eigen::Vector3d>* w,
            std::vector<Eigen::Vector2d>* px) {
