@@ -25,8 +25,14 @@ def direction(zenith_deg: float, azimuth_world_deg: float):
 
 
 def angle_between_deg(u, v) -> float:
-    dot = max(-1.0, min(1.0, sum(x * y for x, y in zip(u, v))))
-    return math.degrees(math.acos(dot))
+    """Angle between two 3-vectors, of any length. atan2(|u x v|, u.v) stays
+    exact for tiny angles, where acos of a dot of float32 vectors that are
+    not quite unit reads 0.01 deg between a vector and itself."""
+    cx = u[1] * v[2] - u[2] * v[1]
+    cy = u[2] * v[0] - u[0] * v[2]
+    cz = u[0] * v[1] - u[1] * v[0]
+    dot = sum(x * y for x, y in zip(u, v))
+    return math.degrees(math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot))
 
 
 @dataclass

@@ -83,3 +83,16 @@ def test_initial_sun_is_scored_on_its_own_frame():
     assert ev.evaluate("s", tr, t).initial_error_deg == pytest.approx(0, abs=1e-5)
     tr.initial.pop("frame")  # without a frame: frame 1's Sun, 3 deg of zenith away
     assert ev.evaluate("s", tr, t).initial_error_deg > 2.5
+
+
+def test_angle_between_is_exact_for_tiny_angles_and_any_length():
+    # float32 round-off leaves a lamp's axis ~1e-8 off unit length: acos of
+    # the dot read 0.014 deg between such a vector and itself.
+    d = (0.837967038154602, -0.025124138221144676, 0.5451421737670898)
+    assert ev.angle_between_deg(d, d) < 1e-9
+    u = ev.direction(40.0, 10.0)
+    v = ev.direction(40.001, 10.0)
+    assert ev.angle_between_deg(u, v) == pytest.approx(0.001, rel=1e-6)
+    assert ev.angle_between_deg([2 * x for x in u], v) == pytest.approx(0.001, rel=1e-6)
+    assert ev.angle_between_deg((1, 0, 0), (-1, 0, 0)) == pytest.approx(180.0)
+    assert ev.angle_between_deg((1, 0, 0), (0, 3, 0)) == pytest.approx(90.0)
