@@ -16,6 +16,15 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+// Frames tracked from the recorded edge casters before the boundaries are
+// searched afresh around the last ones.
+constexpr int kRefreshFrames = 8;
+// Step factor between the search's levels: the parabolas place the minimum
+// well inside a step, so the steps may shrink faster than halving.
+constexpr double kShrink = 0.4;
+// How far (in first search steps) a frame's search may walk from the
+// predicted Sun before the frame counts as lost.
+constexpr double kMaxWalkSteps = 10;
 
 void Require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
@@ -50,11 +59,16 @@ struct ShadowTracker::Impl {
 
   // The ground as the camera sees it, one entry per ground pixel.
   cv::Mat1i ground_index;              // H x W, -1 elsewhere
-  std::vector<cv::Point> pixel;
-  std::vector<float> origin;           // x3: point lifted along the normal
-  std::vector<Eigen::Vector3f> normal;
-  std::vector<Eigen::Vector3f> dpdx, dpdy;  // ground point per pixel step
-  std::vector<float> albedo;           // relative, median 1
+  // Everything a ground pixel needs in one cache line: the band's pixels
+  // are scattered over the frame, and separate arrays cost a miss each.
+  struct GroundPixel {
+    Eigen::Vector3f origin;            // point lifted along the normal
+    Eigen::Vector3f normal;
+    Eigen::Vector3f dpdx, dpdy;        // ground point per pixel step
+    float albedo = 1.f;                // relative, median 1
+    cv::Point px;
+  };
+  std::vector<GroundPixel> ground;
   std::vector<internal::Caster> casters;
 
   // Tracking state.
@@ -65,14 +79,20 @@ struct ShadowTracker::Impl {
   double last_correction_deg = 0.5;    // |found - predicted| on the last frame
   std::vector<int> band;               // ground indices near shadow boundaries
   std::vector<int> boundary;           // ground indices on a lit/shadow boundary
+  // Where the shadow edge comes from: for (a sample of) the shadowed side of
+  // the boundary, the point of the caster its ray to the Sun hits. Moving
+  // the Sun moves the edge to where those points' shadows land.
+  std::vector<Eigen::Vector3f> edge_caster;
+  std::vector<int> edge_ground;        // the ground pixel each was found from
+  int frames_since_refresh = 0;
   int band_core = 0;                   // band[0, band_core) lie by a boundary
   // Scratch per ground pixel, valid where its tag equals the current epoch.
   std::vector<int> tag, slot;
   int epoch = 0;
 
-  // Work buffers: band_origin/ray_x/band_normal per sub-pixel ray,
-  // band_x/band_y per band pixel.
-  std::vector<float> band_origin, ray_x, band_x, band_y;
+  // Work buffers: band_origin/band_normal per sub-pixel ray (subsamples^2
+  // per pixel), band_x/band_y per band pixel.
+  std::vector<float> band_origin, band_x, band_y;
   std::vector<Eigen::Vector3f> band_normal;
   std::vector<uint8_t> occluded;
   AffineFit fit;
@@ -97,20 +117,19 @@ struct ShadowTracker::Impl {
     for (int64_t i = 0; i < n; ++i) {
       if (!hits.hit(i) || !IsGround(hits.object_id[i])) continue;
       const int x = static_cast<int>(px[2 * i]), y = static_cast<int>(px[2 * i + 1]);
-      ground_index(y, x) = static_cast<int>(pixel.size());
-      pixel.emplace_back(x, y);
-      const Eigen::Vector3f p = hits.point(i) + lift * hits.normal(i);
-      origin.insert(origin.end(), {p.x(), p.y(), p.z()});
-      normal.push_back(hits.normal(i));
+      ground_index(y, x) = static_cast<int>(ground.size());
+      GroundPixel gp;
+      gp.px = cv::Point(x, y);
+      gp.normal = hits.normal(i);
+      gp.origin = hits.point(i) + lift * gp.normal;
+      ground.push_back(gp);
     }
-    tag.assign(pixel.size(), 0);
-    slot.assign(pixel.size(), 0);
+    tag.assign(ground.size(), 0);
+    slot.assign(ground.size(), 0);
     // How the ground point moves per pixel, from neighbouring ground pixels.
-    dpdx.assign(pixel.size(), Eigen::Vector3f::Zero());
-    dpdy.assign(pixel.size(), Eigen::Vector3f::Zero());
-    auto point = [&](int g) { return Eigen::Vector3f(&origin[3 * g]); };
+    auto point = [&](int g) { return ground[g].origin; };
     auto derivative = [&](int g, int dx, int dy) -> Eigen::Vector3f {
-      const cv::Point p = pixel[g];
+      const cv::Point p = ground[g].px;
       const cv::Point a(p.x - dx, p.y - dy), b(p.x + dx, p.y + dy);
       const cv::Rect frame(0, 0, W, H);
       const int ga = frame.contains(a) ? ground_index(a) : -1;
@@ -120,22 +139,22 @@ struct ShadowTracker::Impl {
       if (ga >= 0) return point(g) - point(ga);
       return Eigen::Vector3f::Zero();
     };
-    for (int g = 0; g < static_cast<int>(pixel.size()); ++g) {
-      dpdx[g] = derivative(g, 1, 0);
-      dpdy[g] = derivative(g, 0, 1);
+    for (int g = 0; g < static_cast<int>(ground.size()); ++g) {
+      ground[g].dpdx = derivative(g, 1, 0);
+      ground[g].dpdy = derivative(g, 0, 1);
     }
   }
 
   // Shading of ground pixel g toward `toward_sun` given its occlusion flag.
   float Shading(int g, const Eigen::Vector3f& d, bool occ) const {
-    return occ ? 0.f : std::max(0.f, normal[g].dot(d));
+    return occ ? 0.f : std::max(0.f, ground[g].normal.dot(d));
   }
 
   // Lit flags of ground indices `ids` toward d (1 lit, 0 shadow).
   std::vector<uint8_t> LitOf(const std::vector<int>& ids, const Eigen::Vector3f& d) {
     std::vector<float> org(3 * ids.size());
     for (size_t i = 0; i < ids.size(); ++i) {
-      for (int k = 0; k < 3; ++k) org[3 * i + k] = origin[3 * ids[i] + k];
+      for (int k = 0; k < 3; ++k) org[3 * i + k] = ground[ids[i]].origin[k];
     }
     std::vector<uint8_t> occ(ids.size());
     scene.OccludedToward(static_cast<int64_t>(ids.size()), org.data(), d, 0.f, kInf, occ.data());
@@ -150,7 +169,7 @@ struct ShadowTracker::Impl {
     ++epoch;
     std::vector<int> out;
     for (int c : centers) {
-      const cv::Point p = pixel[c];
+      const cv::Point p = ground[c].px;
       for (int y = std::max(0, p.y - r); y <= std::min(H - 1, p.y + r); ++y) {
         const int* row = ground_index[y];
         for (int x = std::max(0, p.x - r); x <= std::min(W - 1, p.x + r); ++x) {
@@ -165,10 +184,37 @@ struct ShadowTracker::Impl {
     return out;
   }
 
-  // Lit/shadow boundaries toward d among `candidates`; sets `boundary` and
-  // returns the band: ground pixels within band_radius of a boundary.
-  std::vector<int> BandAround(const std::vector<int>& candidates, const Eigen::Vector3f& d) {
+  // A sample of the ring r pixels away from `centers` (8 per centre), each
+  // pixel once: the outer band's share of the fit without visiting all of it.
+  std::vector<int> Ring(const std::vector<int>& centers, int r) {
+    ++epoch;
+    std::vector<int> out;
+    const int offsets[8][2] = {{r, 0}, {-r, 0}, {0, r}, {0, -r}, {r, r}, {-r, -r}, {r, -r}, {-r, r}};
+    for (int c : centers) {
+      const cv::Point p = ground[c].px;
+      for (const auto& dxy : offsets) {
+        const int x = p.x + dxy[0], y = p.y + dxy[1];
+        if (x < 0 || y < 0 || x >= W || y >= H) continue;
+        const int g = ground_index(y, x);
+        if (g >= 0 && tag[g] != epoch) {
+          tag[g] = epoch;
+          out.push_back(g);
+        }
+      }
+    }
+    return out;
+  }
+
+  // Lit/shadow boundaries toward d among `candidates`; sets `boundary` (each
+  // pixel once) and returns the band: ground pixels within band_radius of a
+  // boundary, those next to it first. With `thin`, only as many boundary
+  // pixels seed the band as the fit will sample (LoadBand keeps at most
+  // max_band_pixels of it), every so many along the boundary.
+  // `shadowed` (optional) receives the boundary pixels on the shadow side.
+  std::vector<int> BandAround(const std::vector<int>& candidates, const Eigen::Vector3f& d,
+                              bool thin = false, std::vector<int>* shadowed = nullptr) {
     boundary.clear();
+    if (shadowed) shadowed->clear();
     if (candidates.empty()) return {};
     const std::vector<uint8_t> lit = LitOf(candidates, d);
     ++epoch;
@@ -176,23 +222,45 @@ struct ShadowTracker::Impl {
       tag[candidates[i]] = epoch;
       slot[candidates[i]] = static_cast<int>(i);
     }
+    // A second epoch marks pixels already on the boundary.
+    const int seen = ++epoch;
+    auto add = [&](int g, bool is_lit) {
+      if (tag[g] == seen) return;
+      tag[g] = seen;
+      boundary.push_back(g);
+      if (shadowed && !is_lit) shadowed->push_back(g);
+    };
     for (size_t i = 0; i < candidates.size(); ++i) {
-      const cv::Point p = pixel[candidates[i]];
+      const int gi = candidates[i];
+      const cv::Point p = ground[gi].px;
       const cv::Point next[2] = {{p.x + 1, p.y}, {p.x, p.y + 1}};
       for (const cv::Point& q : next) {
         if (q.x >= W || q.y >= H) continue;
         const int g = ground_index(q);
-        if (g < 0 || tag[g] != epoch || lit[slot[g]] == lit[i]) continue;
-        boundary.push_back(candidates[i]);
-        boundary.push_back(g);
+        if (g < 0 || (tag[g] != seen && tag[g] != seen - 1)) continue;
+        const int gs = slot[g];
+        if (lit[gs] == lit[i]) continue;
+        add(gi, lit[i]);
+        add(g, lit[gs]);
       }
     }
     // The pixels next to a boundary carry the direction: they come first in
     // the band, so that subsampling (LoadBand) thins only the outer ring,
     // which serves the photometric fit.
-    std::vector<int> core = Window(boundary, 1);
+    // Along a boundary a 3x3 window adds about 3 new pixels; the outer ring is
+    // kept at least twice what LoadBand samples of it.
+    const int budget = o.max_band_pixels;
+    const size_t core_stride =
+        thin ? std::max<size_t>(1, 3 * boundary.size() / (2 * budget)) : 1;
+    const size_t outer_stride =
+        thin ? std::max<size_t>(1, 2 * boundary.size() / budget) : 1;
+    std::vector<int> seeds;
+    for (size_t i = 0; i < boundary.size(); i += core_stride) seeds.push_back(boundary[i]);
+    std::vector<int> core = Window(seeds, 1);
     const int core_epoch = epoch;
-    std::vector<int> band = Window(boundary, o.band_radius_px);
+    seeds.clear();
+    for (size_t i = 0; i < boundary.size(); i += outer_stride) seeds.push_back(boundary[i]);
+    std::vector<int> band = thin ? Ring(seeds, o.band_radius_px) : Window(seeds, o.band_radius_px);
     band_core = static_cast<int>(core.size());
     for (int g : core) tag[g] = core_epoch;  // mark the core again
     std::vector<int> ordered = core;
@@ -202,10 +270,62 @@ struct ShadowTracker::Impl {
     return ordered;
   }
 
+  // Records which caster point casts each of (a sample of) the shadowed
+  // boundary pixels toward d.
+  void FindEdgeCasters(const std::vector<int>& shadowed, const Eigen::Vector3d& d) {
+    edge_caster.clear();
+    edge_ground.clear();
+    const int stride = (static_cast<int>(shadowed.size()) + 599) / 600;
+    std::vector<float> org, dir;
+    std::vector<int> from;
+    for (size_t i = 0; i < shadowed.size(); i += stride) {
+      const int g = shadowed[i];
+      const Eigen::Vector3f& p = ground[g].origin;
+      org.insert(org.end(), {p.x(), p.y(), p.z()});
+      dir.insert(dir.end(), {float(d.x()), float(d.y()), float(d.z())});
+      from.push_back(g);
+    }
+    const int64_t n = static_cast<int64_t>(from.size());
+    Hits hits(n);
+    scene.Intersect(n, org.data(), dir.data(), 0.f, kInf, hits.buffers());
+    rays_cast += n;
+    for (int64_t i = 0; i < n; ++i) {
+      if (!hits.hit(i) || IsGround(hits.object_id[i])) continue;
+      edge_caster.push_back(hits.point(i));
+      edge_ground.push_back(from[i]);
+    }
+  }
+
+  // Ground pixels where the recorded caster points' shadows land toward d,
+  // each shadow put on the tangent plane of the ground pixel it came from.
+  std::vector<int> MovedEdge(const Eigen::Vector3d& d) {
+    ++epoch;
+    std::vector<int> out;
+    const Eigen::Vector3f df = d.cast<float>();
+    for (size_t i = 0; i < edge_caster.size(); ++i) {
+      const int g = edge_ground[i];
+      const Eigen::Vector3f n = ground[g].normal;
+      const float dn = df.dot(n);
+      if (dn < 0.02f) continue;
+      const Eigen::Vector3f q = edge_caster[i];
+      const Eigen::Vector3f p = q - ((q - ground[g].origin).dot(n) / dn) * df;
+      Eigen::Vector2d px;
+      if (!camera.WorldToPixel(p.cast<double>(), &px)) continue;
+      const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
+      if (x < 0 || y < 0 || x >= W || y >= H) continue;
+      const int h = ground_index(y, x);
+      if (h >= 0 && tag[h] != epoch) {
+        tag[h] = epoch;
+        out.push_back(h);
+      }
+    }
+    return out;
+  }
+
   std::vector<int> AllGround(int stride) const {
     std::vector<int> out;
-    for (int g = 0; g < static_cast<int>(pixel.size()); ++g) {
-      if (pixel[g].x % stride == 0 && pixel[g].y % stride == 0) out.push_back(g);
+    for (int g = 0; g < static_cast<int>(ground.size()); ++g) {
+      if (ground[g].px.x % stride == 0 && ground[g].px.y % stride == 0) out.push_back(g);
     }
     return out;
   }
@@ -222,25 +342,28 @@ struct ShadowTracker::Impl {
     std::vector<int> picked;
     for (int i = 0; i < band_core; i += core_stride) picked.push_back(band[i]);
     for (int i = band_core; i < n; i += outer_stride) picked.push_back(band[i]);
+    // In memory order: the band's pixels are scattered over the frame.
+    std::sort(picked.begin(), picked.end());
+    // subsamples^2 rays over each pixel's footprint: the lit fraction places
+    // an edge within the pixel.
     const int k = o.subsamples;
     band_origin.clear();
     band_normal.clear();
     band_y.clear();
     for (const int g : picked) {
-      const Eigen::Vector3f p(&origin[3 * g]);
+      const GroundPixel& gp = ground[g];
       for (int sy = 0; sy < k; ++sy) {
         for (int sx = 0; sx < k; ++sx) {
           const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
-          const Eigen::Vector3f q = p + ox * dpdx[g] + oy * dpdy[g];
+          const Eigen::Vector3f q = gp.origin + ox * gp.dpdx + oy * gp.dpdy;
           band_origin.insert(band_origin.end(), {q.x(), q.y(), q.z()});
-          band_normal.push_back(normal[g]);
+          band_normal.push_back(gp.normal);
         }
       }
-      const float v = frame.at<float>(pixel[g]);
-      band_y.push_back(o.normalize_albedo ? v / albedo[g] : v);
+      const float v = frame.at<float>(gp.px);
+      band_y.push_back(o.normalize_albedo ? v / gp.albedo : v);
     }
     band_x.resize(band_y.size());
-    ray_x.resize(band_normal.size());
     occluded.resize(band_normal.size());
   }
 
@@ -264,38 +387,77 @@ struct ShadowTracker::Impl {
     return fit.cost;
   }
 
-  // Compass search on the sphere in the tangent plane of `start`.
-  Eigen::Vector3d Search(const Eigen::Vector3d& start, double step_deg, double scale) {
+  // Pattern search on the sphere in the tangent plane of `start`: at each
+  // step size the four axis neighbours are scored, a parabola through each
+  // axis's three costs proposes the minimum between them, and the best of
+  // the six becomes the centre. The step shrinks unless the best lies a
+  // full step away (the minimum may lie further). A third of the
+  // evaluations of a plain compass search, and a better minimum (1080p
+  // benchmark: 28.5 -> 9.5 candidate Suns per frame).
+  // Leaves the best Sun's fit in `fit`. The walk goes at most kMaxWalkSteps
+  // first steps from `start`; *escaped says it wanted to go further (the
+  // shadows are not where the band looks: a re-acquisition's job).
+  Eigen::Vector3d Search(const Eigen::Vector3d& start, double step_deg, double scale,
+                         bool* escaped) {
+    *escaped = false;
     Eigen::Vector3d e1 = start.cross(Eigen::Vector3d::UnitZ());
     if (e1.norm() < 1e-6) e1 = Eigen::Vector3d::UnitX();
     e1.normalize();
     const Eigen::Vector3d e2 = start.cross(e1).normalized();
+    auto at = [&](const Eigen::Vector2d& c) { return (start + c.x() * e1 + c.y() * e2).normalized(); };
+    AffineFit best_fit;
     Eigen::Vector2d uv(0, 0);
     double best = Cost(start, scale);
+    best_fit = fit;
+    auto consider = [&](const Eigen::Vector2d& c, double* cost_out) {
+      const Eigen::Vector3d d = at(c);
+      if (d.z() <= 0.01) {
+        *cost_out = std::numeric_limits<double>::infinity();
+        return false;
+      }
+      *cost_out = Cost(d, scale);
+      return true;
+    };
     double h = step_deg * kDeg;
-    const Eigen::Vector2d moves[4] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+    const double max_walk = kMaxWalkSteps * h;
     int guard = 0;
-    while (h > o.tolerance_deg * kDeg && guard++ < 300) {
-      int pick = -1;
+    while (h > o.tolerance_deg * kDeg && guard++ < 100) {
+      if (uv.norm() > max_walk) {
+        *escaped = true;
+        break;
+      }
+      const Eigen::Vector2d center = uv;
+      const double c0 = best;
+      Eigen::Vector2d pick = center, proposal = center;
       double pick_cost = best;
-      for (int m = 0; m < 4; ++m) {
-        const Eigen::Vector2d c = uv + h * moves[m];
-        const Eigen::Vector3d d = (start + c.x() * e1 + c.y() * e2).normalized();
-        if (d.z() <= 0.01) continue;
-        const double cost = Cost(d, scale);
-        if (cost < pick_cost) {
-          pick_cost = cost;
-          pick = m;
+      for (int axis = 0; axis < 2; ++axis) {
+        Eigen::Vector2d step = Eigen::Vector2d::Zero();
+        step[axis] = h;
+        double cp, cm;
+        consider(center + step, &cp);
+        if (cp < pick_cost) pick_cost = cp, pick = center + step, best_fit = fit;
+        consider(center - step, &cm);
+        if (cm < pick_cost) pick_cost = cm, pick = center - step, best_fit = fit;
+        const double curvature = cp + cm - 2 * c0;
+        if (std::isfinite(curvature) && curvature > 0) {
+          proposal[axis] += std::clamp(0.5 * h * (cm - cp) / curvature, -h, h);
         }
       }
-      if (pick >= 0) {
-        uv += h * moves[pick];
-        best = pick_cost;
-      } else {
-        h *= 0.5;
+      if ((proposal - center).norm() > 0.05 * h && (proposal - pick).norm() > 0.05 * h) {
+        double cq;
+        if (consider(proposal, &cq) && cq < pick_cost) {
+          pick_cost = cq, pick = proposal, best_fit = fit;
+        }
       }
+      // A best point at the step's full reach (a neighbour, or a clamped
+      // parabola) says the minimum may lie further: keep the step.
+      const bool at_reach = (pick - center).cwiseAbs().maxCoeff() >= h * (1 - 1e-6);
+      uv = pick;
+      best = pick_cost;
+      if (!at_reach) h *= kShrink;
     }
-    return (start + uv.x() * e1 + uv.y() * e2).normalized();
+    fit = best_fit;
+    return at(uv);
   }
 
   void Describe(const Eigen::Vector3d& d, TrackedFrame* out) {
@@ -327,7 +489,7 @@ struct ShadowTracker::Impl {
   std::string Unusable(const cv::Mat& frame) const {
     if (frame.empty()) return "frame cannot be decoded";
     if (frame.cols != W || frame.rows != H) return "frame has another size than the clip";
-    const int step = std::max(1, std::min(W, H) / 120);
+    const int step = std::max(1, std::min(W, H) / 60);
     float hi = 0;
     int clipped = 0, count = 0;
     for (int y = o.ignore_top_rows; y < H - o.ignore_bottom_rows; y += step) {
@@ -368,7 +530,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector
   s.lost = 0;
   s.initialized = true;
   s.Describe(d, &out);
-  if (s.pixel.empty()) {
+  if (s.ground.empty()) {
     out.reason = "no ground in view: check the ground objects and the camera";
     return out;
   }
@@ -380,21 +542,23 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector
   std::vector<float> x(all.size()), y(all.size());
   for (size_t i = 0; i < all.size(); ++i) {
     x[i] = s.Shading(all[i], df, !lit[i]);
-    y[i] = frame.at<float>(s.pixel[all[i]]);
+    y[i] = frame.at<float>(s.ground[all[i]].px);
   }
   std::vector<float> sorted = y;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double scale = std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
   AffineFit fit;
   RobustAffineFit(static_cast<int>(all.size()), x.data(), y.data(), nullptr, 1, scale, 4, &fit);
-  s.band = s.BandAround(all, df);
-  s.albedo.assign(s.pixel.size(), 1.f);
+  std::vector<int> shadowed;
+  s.band = s.BandAround(all, df, false, &shadowed);
+  s.FindEdgeCasters(shadowed, d);
+  s.frames_since_refresh = 0;
   cv::Mat1b near_edge(s.H, s.W, uint8_t(0));
-  for (int g : s.band) near_edge(s.pixel[g]) = 1;  // unreliable: lit state uncertain
+  for (int g : s.band) near_edge(s.ground[g].px) = 1;  // unreliable: lit state uncertain
   for (size_t i = 0; i < all.size(); ++i) {
     const double model = fit.a[0] + fit.b[0] * x[i];
-    if (model > 1e-4 && !near_edge(s.pixel[all[i]])) {
-      s.albedo[all[i]] = std::clamp(static_cast<float>(y[i] / model), 0.05f, 20.f);
+    if (model > 1e-4 && !near_edge(s.ground[all[i]].px)) {
+      s.ground[all[i]].albedo = std::clamp(static_cast<float>(y[i] / model), 0.05f, 20.f);
     }
   }
   out.contrast = fit.a[0] > 0 ? fit.b[0] / fit.a[0] : (fit.b[0] > 0 ? 100.0 : 0.0);
@@ -435,20 +599,33 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
     return finish(pred);
   }
   const Eigen::Vector3f pf = pred.cast<float>();
-  // Band near the predicted boundaries: found among the last band's
-  // neighbourhood, or on the whole ground after a loss.
-  // Candidates near the last boundaries (they move a few pixels at most per
-  // frame), or the whole ground after a loss.
-  const std::vector<int> candidates = (!s.boundary.empty() && s.lost == 0)
-                                          ? s.Window(s.boundary, s.o.band_radius_px + 2)
-                                          : s.AllGround(1);
-  std::vector<int> band = s.BandAround(candidates, pf);
-  if (band.empty() && s.lost == 0) band = s.BandAround(s.AllGround(1), pf);
+  // Band near the predicted boundaries. Normally the recorded caster points
+  // say where the edges moved (a few pixels at most), and only a thin strip
+  // around there is ray cast; every so often, or when the edges found that
+  // way are much fewer than before (an edge may have entered the view), the
+  // whole neighbourhood of the last boundaries is searched instead, and the
+  // whole ground after a loss.
+  const std::vector<int> last_boundary = s.boundary;
+  std::vector<int> shadowed, band;
+  if (s.lost == 0 && !s.edge_caster.empty() && s.frames_since_refresh < kRefreshFrames) {
+    band = s.BandAround(s.Window(s.MovedEdge(pred), 2), pf, true, &shadowed);
+    ++s.frames_since_refresh;
+    if (s.boundary.size() < 0.8 * last_boundary.size()) band.clear();
+  }
+  if (band.empty()) {
+    s.frames_since_refresh = 0;
+    const std::vector<int> candidates = (!last_boundary.empty() && s.lost == 0)
+                                            ? s.Window(last_boundary, s.o.band_radius_px + 2)
+                                            : s.AllGround(1);
+    band = s.BandAround(candidates, pf, true, &shadowed);
+    if (band.empty() && s.lost == 0) band = s.BandAround(s.AllGround(1), pf, true, &shadowed);
+  }
   if (band.empty()) {
     ++s.lost;
     out.reason = "no cast shadow of the model falls on the ground in view";
     return finish(pred);
   }
+  s.FindEdgeCasters(shadowed, pred);
   s.band = band;
   s.LoadBand(frame);
   std::vector<float> sorted = s.band_y;
@@ -460,8 +637,14 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
                                  : std::clamp(2.0 * s.last_correction_deg,
                                               std::max(0.05, 2 * s.o.tolerance_deg),
                                               s.o.search_step_deg);
-  const Eigen::Vector3d found = s.Search(pred, step, scale);
-  s.Cost(found, scale);  // leaves the fit of the found Sun in s.fit
+  bool escaped = false;
+  const Eigen::Vector3d found = s.Search(pred, step, scale, &escaped);  // leaves its fit in s.fit
+  if (escaped) {
+    ++s.lost;
+    out.reason = "shadow lost: no match within " + std::to_string(static_cast<int>(std::lround(
+                     kMaxWalkSteps * step))) + " deg of the predicted Sun";
+    return finish(pred);
+  }
   const double a = s.fit.a[0], b = s.fit.b[0];
   out.contrast = a > 0 ? b / a : (b > 0 ? 100.0 : 0.0);
   out.band_pixels = static_cast<int>(s.band_y.size());

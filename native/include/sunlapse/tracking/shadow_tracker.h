@@ -37,9 +37,10 @@ struct ShadowTrackerOptions {
   // give the same accuracy (0.2-0.25 deg worst).
   int max_band_pixels = 800;
   // Largest first search step around the predicted Sun, and the final step
-  // (deg); the result is good to about 0.1 deg, so finer steps buy nothing.
+  // (deg); the search's parabolas place the minimum within the last step and
+  // the result is good to about 0.1 deg, so finer steps buy nothing.
   double search_step_deg = 0.5;
-  double tolerance_deg = 0.02;
+  double tolerance_deg = 0.04;
   // Cauchy scale as a fraction of the band's median intensity.
   double loss_scale = 0.35;
   // Shadow lost when the fitted sun/ambient contrast falls below this (sunny
