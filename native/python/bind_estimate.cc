@@ -11,6 +11,7 @@
 #include "sunlapse/initial/initial_sun.h"
 #include "sunlapse/tracking/shadow_tracker.h"
 #include "sunlapse/tracking/thesis_tracker.h"
+#include "sunlapse/tracking/unmodelled_shadows.h"
 #include "sunlapse/video/video_reader.h"
 
 namespace sunlapse::python {
@@ -150,6 +151,67 @@ void BindEstimate(py::module_& m) {
           "Next frame as uint8 (H,W,3) BGR; None for a frame that cannot be "
           "decoded; raises StopIteration at the end.")
       .def("seek", &VideoReader::Seek, py::arg("index"));
+
+  m.def(
+      "detect_unmodelled_shadows",
+      [](const py::array& frame, const py::object& background, const py::array& ground,
+         const py::array& model_shadow, double dark_ratio, double max_chroma_ratio,
+         int model_margin_px, double min_area_fraction, double min_edge_contrast) {
+        // float32 (H,W) gray or (H,W,3) linear BGR; masks uint8 (H,W).
+        auto image = [](const py::array& a, const char* name) {
+          const int channels = a.ndim() == 3 ? static_cast<int>(a.shape(2)) : 1;
+          const float* data = a.ndim() == 3 ? CheckArray<float>(a, name, {-1, -1, 3})
+                                            : CheckArray<float>(a, name, {-1, -1});
+          return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                         CV_32FC(channels), const_cast<float*>(data));
+        };
+        auto mask = [](const py::array& a, const char* name) {
+          const uint8_t* data = CheckArray<uint8_t>(a, name, {-1, -1});
+          return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_8UC1,
+                         const_cast<uint8_t*>(data));
+        };
+        const cv::Mat f = image(frame, "frame");
+        const cv::Mat b = background.is_none() ? cv::Mat()
+                                               : image(background.cast<py::array>(), "background");
+        const cv::Mat g = mask(ground, "ground"), s = mask(model_shadow, "model_shadow");
+        UnmodelledShadowOptions o;
+        o.dark_ratio = dark_ratio;
+        o.max_chroma_ratio = max_chroma_ratio;
+        o.model_margin_px = model_margin_px;
+        o.min_area_fraction = min_area_fraction;
+        o.min_edge_contrast = min_edge_contrast;
+        UnmodelledShadows r;
+        {
+          py::gil_scoped_release release;
+          r = DetectUnmodelledShadows(f, b, g, s, o);
+        }
+        py::array_t<uint8_t> out_mask({r.mask.rows, r.mask.cols});
+        std::memcpy(out_mask.mutable_data(), r.mask.data, r.mask.total());
+        py::list regions;
+        for (const UnmodelledShadow& u : r.regions) {
+          py::dict d;
+          d["area_px"] = u.area_px;
+          d["box"] = py::make_tuple(u.box.x, u.box.y, u.box.width, u.box.height);
+          d["centroid_px"] = py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
+          d["darkening"] = u.darkening;
+          d["edge_contrast"] = u.edge_contrast;
+          regions.append(d);
+        }
+        py::dict d;
+        d["mask"] = out_mask;
+        d["regions"] = regions;
+        return d;
+      },
+      py::arg("frame").noconvert(), py::arg("background"),
+      py::arg("ground").noconvert(), py::arg("model_shadow").noconvert(),
+      py::arg("dark_ratio") = 0.7, py::arg("max_chroma_ratio") = 2.5,
+      py::arg("model_margin_px") = 2, py::arg("min_area_fraction") = 2e-4,
+      py::arg("min_edge_contrast") = 2.5,
+      "Hard ground shadows the model does not explain: {'mask': uint8 (H,W) 255 on "
+      "them, 'regions': [{'area_px', 'box', 'centroid_px', 'darkening', "
+      "'edge_contrast'}]}. frame/background float32 gray (H,W) or linear BGR (H,W,3), "
+      "background None for the frame alone; "
+      "ground/model_shadow uint8 (H,W) masks.");
 
   m.def(
       "to_linear_gray",
