@@ -54,6 +54,34 @@ def background(frames_gray: Sequence[np.ndarray], top: int = 0) -> Optional[np.n
                          axis=0).astype(np.float32)
 
 
+def linear_bgr(bgr: np.ndarray, gamma: float = 2.2) -> np.ndarray:
+    """uint8 BGR -> float32 linear BGR in [0, 1]."""
+    return np.power(bgr.astype(np.float32) / 255.0, gamma).astype(np.float32)
+
+
+def ground_and_model_shadow(scene, camera, ground_ids: Sequence[int], sun_in_world,
+                            top: int = 0):
+    """Dense uint8 masks (H x W, 255 = set): the model's ground as the camera
+    sees it, and the model's cast shadow on it toward `sun_in_world`."""
+    h, w = camera.height, camera.width
+    ys, xs = np.mgrid[0:h, 0:w]
+    pixels = np.ascontiguousarray(np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float64))
+    hits = scene.intersect_pixels(camera, pixels)
+    on = np.isin(hits["object_id"], np.asarray(list(ground_ids), dtype=np.int32))
+    on &= ys.ravel() >= top
+    scale = max(1e-3, float(np.max(np.abs(hits["point"][on])))) if on.any() else 1.0
+    origins = (hits["point"][on] + 1e-4 * scale * hits["normal"][on]).astype(np.float32)
+    d = np.asarray(sun_in_world, dtype=np.float32)
+    occ = scene.occluded(np.ascontiguousarray(origins),
+                         np.ascontiguousarray(np.tile(d, (len(origins), 1))))
+    ground = np.zeros(h * w, dtype=np.uint8)
+    shadow = np.zeros(h * w, dtype=np.uint8)
+    ground[on] = 255
+    idx = np.flatnonzero(on)
+    shadow[idx[occ.astype(bool)]] = 255
+    return ground.reshape(h, w), shadow.reshape(h, w)
+
+
 def fibonacci_sky(n: int, min_elevation_deg: float = 1.0) -> np.ndarray:
     """About n unit directions spread evenly over the sky above the given elevation."""
     top = 1.0

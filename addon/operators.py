@@ -208,6 +208,8 @@ def finish_run(context, track, clip, extra):
         problems.append(f"{count} frame(s): {reason}")
     if problems:
         msg += ": " + "; ".join(problems)
+    if track.extra.get("model_hint"):  # advisory: not a warning
+        msg += ". Note: " + track.extra["model_hint"]
     context.scene.sunlapse.last_report = msg
     return msg
 

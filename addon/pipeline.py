@@ -128,6 +128,37 @@ def _gray(bgr, camera, method):
     return native.to_linear_gray(bgr, GAMMA[method])
 
 
+# A hint to model a missing caster needs a shadow of at least this share of
+# the frame (smaller ones are noted in the track file only).
+HINT_MIN_AREA = 1e-3
+
+
+def _note_unmodelled_shadows(track, scene, camera, frame, bgr, sun_in_world, options):
+    """Hard ground shadows on the anchor frame that the model does not cast
+    (its casters are missing from the model): recorded in the track file
+    (extra.unmodelled_shadows) and, when large, turned into a hint for the
+    artist (extra.model_hint). Advisory: a failure here only notes itself."""
+    native = native_loader.require()
+    try:
+        ground, shadow = acquire.ground_and_model_shadow(
+            scene, camera, options.ground_object_ids, sun_in_world, options.ignore_top_rows)
+        found = native.detect_unmodelled_shadows(acquire.linear_bgr(bgr, GAMMA[options.method]),
+                                                 None, ground, shadow)
+    except (ValueError, RuntimeError, MemoryError) as e:
+        track.extra["unmodelled_shadows"] = {"frame": frame, "error": str(e)}
+        return
+    regions = [dict(r, box=list(r["box"]), centroid_px=list(r["centroid_px"]))
+               for r in found["regions"]]
+    track.extra["unmodelled_shadows"] = {"frame": frame, "regions": regions}
+    big = [r for r in regions if r["area_px"] >= HINT_MIN_AREA * camera.width * camera.height]
+    if big:
+        x, y = big[0]["centroid_px"]
+        track.extra["model_hint"] = (
+            f"{len(big)} hard ground shadow(s) on frame {frame} are not cast by the model "
+            f"(the largest, {big[0]['area_px']} px, around pixel ({x:.0f}, {y:.0f})): model "
+            f"their casters and the tracker will follow their shadows too")
+
+
 def estimate_initial(scene, camera, bgr, options: RunOptions, progress=None, gray=None) -> dict:
     """The initial Sun on one frame (uint8 BGR, or its gray if already made);
     the native result dict."""
@@ -281,7 +312,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     # the first frame.
     tries = 1 if (options.method == "thesis" or options.initial_sun is not None) \
         else min(ACQUIRE_TRIES, len(visit))
-    best = None  # (confidence, position, init, gray)
+    best = None  # (confidence, position, init, gray, bgr)
     tried = []
     for p in range(tries):
         try:
@@ -309,12 +340,12 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         tried.append({"frame": visit[p], "confidence": max(conf, 0.0),
                       "message": init["message"] or None})
         if best is None or conf > best[0]:
-            best = (conf, p, init, gray)
+            best = (conf, p, init, gray, bgr)
         if conf >= DOUBTFUL_CONFIDENCE:
             break
     if best is None:
         raise PipelineError(f"frame {visit[0]} of the clip cannot be decoded")
-    _, anchor, init, anchor_gray = best
+    _, anchor, init, anchor_gray, anchor_bgr = best
     if init.get("source") == "shadow_search":
         track.method["initial"] = "shadow_search"
     if len(tried) > 1:
@@ -331,6 +362,10 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
                      "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
                      "ambient_intensity": init["ambient_intensity"],
                      "seconds": init["seconds"], "message": init["message"] or None}
+
+    if options.method != "thesis":
+        _note_unmodelled_shadows(track, scene, camera, visit[anchor], anchor_bgr,
+                                 init["sun_in_world"], options)
 
     if options.method == "thesis":
         tracker = native.ThesisTracker(scene, camera, options.ground_object_ids,

@@ -64,11 +64,15 @@ def print_shadow_scores(out, method, presets, size):
     if not cells:
         return
     width = max(20, max(len(p) + 2 for p in cells))
-    print("Shadow detection vs truth masks (mean over mask frames):")
-    for key, label in (("pixel_precision", "Shadow px precision"), ("pixel_recall", "Shadow px recall"),
-                       ("edge_precision", "Shadow edge precision"), ("edge_recall", "Shadow edge recall")):
-        print(label.ljust(22) + "".join(
-            (f"{cells[p][key]:.2f}" if p in cells and cells[p] else "-").rjust(width) for p in presets))
+    print("Shadow detection vs truth masks (mean over mask frames); 'model': the model's "
+          "cast shadows under our Sun; '+image': plus the hard shadows the model does not "
+          "explain, found in the frames:")
+    for kind, tag in (("model", "model"), ("model+image", "+image")):
+        for key, label in (("pixel_precision", "px precision"), ("pixel_recall", "px recall"),
+                           ("edge_precision", "edge precision"), ("edge_recall", "edge recall")):
+            print(f"{tag} {label}".ljust(22) + "".join(
+                (f"{cells[p][kind][key]:.2f}" if cells.get(p, {}).get(kind) else "-").rjust(width)
+                for p in presets))
 
 
 def main(argv=None):

@@ -2,11 +2,15 @@
 
   blender -b SCENE.blend --python bench/score_shadows.py -- TRACK.json TRUTH.json
 
-Our detection on a frame is the model's cast shadows on the ground under
-that frame's estimated Sun (what the tracker matches to the image). For each
-frame with a ground-truth mask it compares shadow pixels (precision, recall)
-and shadow edges (within 1 px). Casters that are in the footage but not in
-the model are in the truth and not in our detection: recall shows them.
+Two detections per frame with a ground-truth mask, each scored by shadow
+pixels (precision, recall) and shadow edges (within 1 px):
+  "model": the model's cast shadows on the ground under that frame's
+           estimated Sun (what the tracker matches to the image);
+  "model+image": those plus the hard shadows the model does not explain,
+           found in the frame itself (native.detect_unmodelled_shadows, one
+           frame, no background: a short clip's shadows barely move, so its
+           median is not shadow-free): casters that are in the footage but
+           not in the model.
 Prints one line "SHADOWS {json}".
 """
 import json
@@ -21,7 +25,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(HERE), "examples"))
 import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
-from sunlapse import bridge  # noqa: E402
+from sunlapse import acquire, bridge, native_loader, pipeline  # noqa: E402
 from sunlapse.core import evaluation, trackfile  # noqa: E402
 
 
@@ -45,40 +49,62 @@ def pr(pred, truth):
     return (tp / max(1.0, pred.sum()), tp / max(1.0, truth.sum()))
 
 
+def scores(pred, gt, on_ground):
+    p_pix, r_pix = pr(pred, gt)
+    pe, ge = edges(pred) & on_ground, edges(gt)
+    return {"pixel_precision": p_pix, "pixel_recall": r_pix,
+            "edge_precision": float((pe & dilate(ge)).sum()) / max(1.0, pe.sum()),
+            "edge_recall": float((ge & dilate(pe)).sum()) / max(1.0, ge.sum())}
+
+
+def clip_frames(clip, frames):
+    """Linear BGR of the given scene frames (None where unreadable)."""
+    out = {}
+    reader = pipeline.open_clip(clip.filepath, 0)
+    for f in frames:
+        try:
+            bgr = reader.read() if reader.seek(f - clip.frame_start) else None
+        except StopIteration:
+            bgr = None
+        out[f] = None if bgr is None else acquire.linear_bgr(bgr)
+    return out
+
+
 def main(track_path, truth_path):
     ctx = bpy.context
+    native = native_loader.require()
     track, truth = trackfile.read_track(track_path), trackfile.read_track(truth_path)
     clip = bridge.gather_clip(ctx)
     cam = bridge.build_camera(bridge.gather_camera(ctx, None, clip, bridge.active_movieclip(ctx)))
     model = bridge.gather_model(ctx)
     scene = bridge.build_scene(model)
-    ground = model.ids_of(truth.extra.get("ground_objects", ["Ground"]))
-    w, h = cam.width, cam.height
-    ys, xs = np.mgrid[0:h, 0:w]
-    pixels = np.ascontiguousarray(np.column_stack([xs.ravel(), ys.ravel()]).astype(np.float64))
-    hits = scene.intersect_pixels(cam, pixels)
-    on_ground = np.isin(hits["object_id"], ground)
-    origins = np.ascontiguousarray((hits["point"] + 2e-3 * hits["normal"]).astype(np.float32))
+    ground_ids = model.ids_of(truth.extra.get("ground_objects", ["Ground"]))
+    masks = sorted(truth.extra.get("shadow_masks", {}).items(), key=lambda kv: int(kv[0]))
+    linear = clip_frames(clip, [int(f) for f, _ in masks])
     rows = []
-    for frame, rel in sorted(truth.extra.get("shadow_masks", {}).items(), key=lambda kv: int(kv[0])):
+    for frame, rel in masks:
         est = track.frame(int(frame))
         if est is None or not est.has_estimate:
             continue
-        d = np.array(evaluation.direction(est.zenith_deg, est.azimuth_deg + track.north_offset_deg),
-                     dtype=np.float32)
-        occ = scene.occluded(origins, np.ascontiguousarray(np.tile(d, (len(origins), 1))))
-        pred = (occ & on_ground).reshape(h, w)
+        d = evaluation.direction(est.zenith_deg, est.azimuth_deg + track.north_offset_deg)
+        ground, shadow = acquire.ground_and_model_shadow(scene, cam, ground_ids, d)
+        on_ground = ground > 0
+        pred = shadow > 0
         img = bpy.data.images.load(os.path.join(os.path.dirname(truth_path), rel))
         gt = np.array(img.pixels[:]).reshape(img.size[1], img.size[0], -1)[::-1, :, 0] > 0.5
         bpy.data.images.remove(img)
-        p_pix, r_pix = pr(pred, gt)
-        pe, ge = edges(pred) & on_ground.reshape(h, w), edges(gt)
-        p_edge = float((pe & dilate(ge)).sum()) / max(1.0, pe.sum())
-        r_edge = float((ge & dilate(pe)).sum()) / max(1.0, ge.sum())
-        rows.append({"frame": int(frame), "pixel_precision": p_pix, "pixel_recall": r_pix,
-                     "edge_precision": p_edge, "edge_recall": r_edge})
-    mean = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} if rows else {}
-    mean.pop("frame", None)
+        row = {"frame": int(frame), "model": scores(pred, gt, on_ground)}
+        f = linear.get(int(frame))
+        if f is not None:
+            found = native.detect_unmodelled_shadows(f, None, ground, shadow)
+            row["unmodelled_regions"] = len(found["regions"])
+            row["model+image"] = scores(pred | (found["mask"] > 0), gt, on_ground)
+        rows.append(row)
+    mean = {}
+    for kind in ("model", "model+image"):
+        have = [r[kind] for r in rows if kind in r]
+        if have:
+            mean[kind] = {key: float(np.mean([h[key] for h in have])) for key in have[0]}
     print("SHADOWS " + json.dumps({"frames": rows, "mean": mean}))
 
 
