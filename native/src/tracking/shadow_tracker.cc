@@ -409,14 +409,21 @@ struct ShadowTracker::Impl {
     Eigen::Vector2d uv(0, 0);
     double best = Cost(start, scale);
     best_fit = fit;
+    // Points already scored (a level that moves to a neighbour has the old
+    // centre among its own neighbours): their costs are reused. A reused
+    // point is never better than the centre, so its fit is not needed.
+    std::vector<std::pair<Eigen::Vector2d, double>> scored = {{uv, best}};
     auto consider = [&](const Eigen::Vector2d& c, double* cost_out) {
-      const Eigen::Vector3d d = at(c);
-      if (d.z() <= 0.01) {
-        *cost_out = std::numeric_limits<double>::infinity();
-        return false;
+      for (const auto& [p, cost] : scored) {
+        if ((p - c).norm() < 1e-9) {
+          *cost_out = cost;
+          return false;
+        }
       }
-      *cost_out = Cost(d, scale);
-      return true;
+      const Eigen::Vector3d d = at(c);
+      *cost_out = d.z() <= 0.01 ? std::numeric_limits<double>::infinity() : Cost(d, scale);
+      scored.emplace_back(c, *cost_out);
+      return std::isfinite(*cost_out);
     };
     double h = step_deg * kDeg;
     const double max_walk = kMaxWalkSteps * h;
@@ -445,7 +452,7 @@ struct ShadowTracker::Impl {
       }
       if ((proposal - center).norm() > 0.05 * h && (proposal - pick).norm() > 0.05 * h) {
         double cq;
-        if (consider(proposal, &cq) && cq < pick_cost) {
+        if (consider(proposal, &cq) && cq < pick_cost) {  // fresh, so fit is its own
           pick_cost = cq, pick = proposal, best_fit = fit;
         }
       }
