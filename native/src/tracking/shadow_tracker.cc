@@ -184,6 +184,16 @@ struct ShadowTracker::Impl {
     return out;
   }
 
+  // Appends the ground pixel at (x, y), if any, unless this epoch has it.
+  void AddOnce(int x, int y, std::vector<int>* out) {
+    if (x < 0 || y < 0 || x >= W || y >= H) return;
+    const int g = ground_index(y, x);
+    if (g >= 0 && tag[g] != epoch) {
+      tag[g] = epoch;
+      out->push_back(g);
+    }
+  }
+
   // A sample of the ring r pixels away from `centers` (8 per centre), each
   // pixel once: the outer band's share of the fit without visiting all of it.
   std::vector<int> Ring(const std::vector<int>& centers, int r) {
@@ -192,15 +202,7 @@ struct ShadowTracker::Impl {
     const int offsets[8][2] = {{r, 0}, {-r, 0}, {0, r}, {0, -r}, {r, r}, {-r, -r}, {r, -r}, {-r, r}};
     for (int c : centers) {
       const cv::Point p = ground[c].px;
-      for (const auto& dxy : offsets) {
-        const int x = p.x + dxy[0], y = p.y + dxy[1];
-        if (x < 0 || y < 0 || x >= W || y >= H) continue;
-        const int g = ground_index(y, x);
-        if (g >= 0 && tag[g] != epoch) {
-          tag[g] = epoch;
-          out.push_back(g);
-        }
-      }
+      for (const auto& dxy : offsets) AddOnce(p.x + dxy[0], p.y + dxy[1], &out);
     }
     return out;
   }
@@ -311,13 +313,7 @@ struct ShadowTracker::Impl {
       const Eigen::Vector3f p = q - ((q - ground[g].origin).dot(n) / dn) * df;
       Eigen::Vector2d px;
       if (!camera.WorldToPixel(p.cast<double>(), &px)) continue;
-      const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
-      if (x < 0 || y < 0 || x >= W || y >= H) continue;
-      const int h = ground_index(y, x);
-      if (h >= 0 && tag[h] != epoch) {
-        tag[h] = epoch;
-        out.push_back(h);
-      }
+      AddOnce(static_cast<int>(std::lround(px.x())), static_cast<int>(std::lround(px.y())), &out);
     }
     return out;
   }
