@@ -91,6 +91,7 @@ def physical_inputs(args, context, options):
     add-on (its latitude, longitude, date, time and UTC zone). With the
     frames' times known (a times file) only the place is needed."""
     import datetime as dt
+    from .core import frametimes
     sp = getattr(context.scene, "sun_pos_properties", None)
 
     def pick(flag, from_options, from_sun_position):
@@ -123,9 +124,7 @@ def physical_inputs(args, context, options):
             else:
                 hours = getattr(sp, "time", None)
             if day is not None and hours is not None:
-                tz = dt.timezone(dt.timedelta(hours=utc))
-                first = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + \
-                    dt.timedelta(hours=hours)
+                first = frametimes.local_start(day, hours, utc)
     except ValueError as e:
         fail(EXIT_USAGE, f"bad --date or --start-time: {e}")
     seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds

@@ -183,8 +183,7 @@ def physical_from_settings(context, settings, options):
         return
     if day is None or settings.frame_seconds <= 0:
         return
-    tz = dt.timezone(dt.timedelta(hours=utc))
-    options.first_time = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
+    options.first_time = frametimes.local_start(day, hours, utc)
     options.frame_seconds = settings.frame_seconds
     options.latitude_deg, options.longitude_deg = lat, lon
 

@@ -44,6 +44,13 @@ def parse_time(text: str, tz: dt.tzinfo) -> dt.datetime:
     return t if t.tzinfo is not None else t.replace(tzinfo=tz)
 
 
+def local_start(day: dt.date, hours: float, utc_offset_hours: float) -> dt.datetime:
+    """The aware datetime `hours` after midnight of `day` in the zone
+    UTC+utc_offset_hours (a panel's or the flags' date, start time and zone)."""
+    tz = dt.timezone(dt.timedelta(hours=utc_offset_hours))
+    return dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
+
+
 def read_times(path: str, utc_offset_hours: float = 0.0) -> Dict[int, dt.datetime]:
     """{clip frame number: aware UTC datetime} from a times CSV."""
     try:

@@ -202,6 +202,27 @@ def test_scripted_run_with_physical_smoothing(tiny_plaza, tmp_path):
         assert abs(((f["azimuth_deg"] - t.azimuth_deg) + 180) % 360 - 180) < 5
 
 
+def test_panel_physical_smoothing_uses_the_panels_place_and_time(tiny_plaza):
+    # The same as the flags above, typed into the panel instead.
+    import datetime as dt
+    out, truth = open_preset(tiny_plaza)
+    d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
+    s = bpy.context.scene.sunlapse
+    s.smoothing = "physical"
+    s.latitude, s.longitude = 48.85, 2.35
+    s.date = d0.date().isoformat()
+    s.start_hour = d0.hour + d0.minute / 60
+    s.utc_offset = d0.utcoffset().total_seconds() / 3600
+    s.frame_seconds = (d1 - d0).total_seconds()
+    assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
+    track = results.load_track()
+    assert track.method["smoothing"] == "physical"
+    fit = track.extra["sun_path_fit"]
+    assert abs(((fit["north_offset_deg"] - truth.north_offset_deg) + 180) % 360 - 180) < 3
+    for f, t in zip(track.frames, truth.frames):  # geographic azimuths
+        assert abs(((f.azimuth_deg - t.azimuth_deg) + 180) % 360 - 180) < 5
+
+
 def test_physical_smoothing_says_what_it_needs(tiny_plaza, tmp_path):
     out, truth = tiny_plaza
     proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "p.json"),

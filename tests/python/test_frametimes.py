@@ -55,3 +55,9 @@ def test_chronological_order_and_out_of_order_frames():
     assert frametimes.chronological(frames, None) == [0, 1, 2, 3]
     assert frametimes.out_of_order(frames, t) == [2]
     assert frametimes.seconds_since(t) == [36000.0, 0.0, 0.0, 3600.0]
+
+
+def test_local_start_is_hours_after_midnight_in_the_zone():
+    t = frametimes.local_start(dt.date(2005, 3, 21), 10.5, 1.0)
+    assert t.isoformat() == "2005-03-21T10:30:00+01:00"
+    assert t.astimezone(dt.timezone.utc).hour == 9
