@@ -59,6 +59,22 @@ def linear_bgr(bgr: np.ndarray, gamma: float = 2.2) -> np.ndarray:
     return np.power(bgr.astype(np.float32) / 255.0, gamma).astype(np.float32)
 
 
+def clip_background(frames: Sequence[np.ndarray], rows_per_chunk: int = 64) -> Optional[np.ndarray]:
+    """The per-pixel median (uint8 BGR) of a few frames spread over a clip:
+    its shadow-free background when the shadows moved between them (None
+    for fewer than 3 frames). Done in bands of rows on uint8, so memory stays
+    near the frames' own."""
+    frames = [f for f in frames if f is not None]
+    if len(frames) < 3 or any(f.shape != frames[0].shape for f in frames):
+        return None
+    k = len(frames) // 2
+    out = np.empty_like(frames[0])
+    for y in range(0, out.shape[0], rows_per_chunk):
+        band = np.stack([f[y:y + rows_per_chunk] for f in frames])
+        out[y:y + rows_per_chunk] = np.partition(band, k, axis=0)[k]
+    return out
+
+
 def ground_and_model_shadow(scene, camera, ground_ids: Sequence[int], sun_in_world,
                             top: int = 0):
     """Dense uint8 masks (H x W, 255 = set): the model's ground as the camera

@@ -7,10 +7,9 @@ pixels (precision, recall) and shadow edges (within 1 px):
   "model": the model's cast shadows on the ground under that frame's
            estimated Sun (what the tracker matches to the image);
   "model+image": those plus the hard shadows the model does not explain,
-           found in the frame itself (native.detect_unmodelled_shadows, one
-           frame, no background: a short clip's shadows barely move, so its
-           median is not shadow-free): casters that are in the footage but
-           not in the model.
+           found in the frame against the clip's shadow-free background
+           (pipeline.detect_unmodelled_shadows, as a run does on its anchor
+           frame): casters that are in the footage but not in the model.
 Prints one line "SHADOWS {json}".
 """
 import json
@@ -25,7 +24,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(HERE), "examples"))
 import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
-from sunlapse import acquire, bridge, native_loader, pipeline  # noqa: E402
+from sunlapse import acquire, bridge, pipeline  # noqa: E402
 from sunlapse.core import evaluation, trackfile  # noqa: E402
 
 
@@ -58,7 +57,7 @@ def scores(pred, gt, on_ground):
 
 
 def clip_frames(clip, frames):
-    """Linear BGR of the given scene frames (None where unreadable)."""
+    """uint8 BGR of the given scene frames (None where unreadable)."""
     out = {}
     reader = pipeline.open_clip(clip.filepath, 0)
     for f in frames:
@@ -66,13 +65,12 @@ def clip_frames(clip, frames):
             bgr = reader.read() if reader.seek(f - clip.frame_start) else None
         except StopIteration:
             bgr = None
-        out[f] = None if bgr is None else acquire.linear_bgr(bgr)
+        out[f] = bgr
     return out
 
 
 def main(track_path, truth_path):
     ctx = bpy.context
-    native = native_loader.require()
     track, truth = trackfile.read_track(track_path), trackfile.read_track(truth_path)
     clip = bridge.gather_clip(ctx)
     cam = bridge.build_camera(bridge.gather_camera(ctx, None, clip, bridge.active_movieclip(ctx)))
@@ -80,23 +78,30 @@ def main(track_path, truth_path):
     scene = bridge.build_scene(model)
     ground_ids = model.ids_of(truth.extra.get("ground_objects", ["Ground"]))
     masks = sorted(truth.extra.get("shadow_masks", {}).items(), key=lambda kv: int(kv[0]))
-    linear = clip_frames(clip, [int(f) for f, _ in masks])
+    n = len(truth.frames)
+    k = min(acquire.BACKGROUND_SAMPLES, n)
+    samples = sorted({truth.frames[round(i * (n - 1) / max(1, k - 1))].frame for i in range(k)})
+    bgr = clip_frames(clip, sorted(set(samples) | {int(f) for f, _ in masks}))
     rows = []
     for frame, rel in masks:
         est = track.frame(int(frame))
         if est is None or not est.has_estimate:
             continue
         d = evaluation.direction(est.zenith_deg, est.azimuth_deg + track.north_offset_deg)
-        ground, shadow = acquire.ground_and_model_shadow(scene, cam, ground_ids, d)
+        f = bgr.get(int(frame))
+        found = None if f is None else pipeline.detect_unmodelled_shadows(
+            scene, cam, ground_ids, f, d, [bgr[s] for s in samples])
+        if found is None:
+            ground, shadow = acquire.ground_and_model_shadow(scene, cam, ground_ids, d)
+        else:
+            ground, shadow = found["ground"], found["model_shadow"]
         on_ground = ground > 0
         pred = shadow > 0
         img = bpy.data.images.load(os.path.join(os.path.dirname(truth_path), rel))
         gt = np.array(img.pixels[:]).reshape(img.size[1], img.size[0], -1)[::-1, :, 0] > 0.5
         bpy.data.images.remove(img)
         row = {"frame": int(frame), "model": scores(pred, gt, on_ground)}
-        f = linear.get(int(frame))
-        if f is not None:
-            found = native.detect_unmodelled_shadows(f, None, ground, shadow)
+        if found is not None:
             row["unmodelled_regions"] = len(found["regions"])
             row["model+image"] = scores(pred | (found["mask"] > 0), gt, on_ground)
         rows.append(row)

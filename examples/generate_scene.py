@@ -2,6 +2,7 @@
 
   blender -b --factory-startup --python examples/generate_scene.py -- \
       --preset plaza --out DIR [--tiny] [--frames N] [--resolution WxH] [--samples S]
+      [--minutes-per-frame M]
 
 Writes into DIR:
   clip.mp4          the footage (Cycles, few samples, no denoising, H.264)
@@ -328,6 +329,8 @@ def parse_args(argv):
     p.add_argument("--frames", type=int)
     p.add_argument("--resolution", help="WxH")
     p.add_argument("--samples", type=int)
+    p.add_argument("--minutes-per-frame", type=float,
+                   help="time between frames (default: the preset's)")
     p.add_argument("--mask-frames", type=int, default=3,
                    help="how many frames get a ground-truth shadow mask")
     return p.parse_args(argv)
@@ -336,7 +339,9 @@ def parse_args(argv):
 def main(argv):
     args = parse_args(argv)
     native = native_loader.require()
-    preset = PRESETS[args.preset]
+    preset = dict(PRESETS[args.preset])
+    if args.minutes_per_frame:
+        preset["minutes_per_frame"] = args.minutes_per_frame
     frames = args.frames or (3 if args.tiny else preset["frames"])
     width, height = (128, 96) if args.tiny else (640, 360)
     if args.resolution:

@@ -156,7 +156,8 @@ void BindEstimate(py::module_& m) {
       "detect_unmodelled_shadows",
       [](const py::array& frame, const py::object& background, const py::array& ground,
          const py::array& model_shadow, double dark_ratio, double max_chroma_ratio,
-         int model_margin_px, double min_area_fraction, double min_edge_contrast) {
+         int model_margin_px, double min_area_fraction, double min_edge_contrast,
+         int registration_px) {
         // float32 (H,W) gray or (H,W,3) linear BGR; masks uint8 (H,W).
         auto image = [](const py::array& a, const char* name) {
           const int channels = a.ndim() == 3 ? static_cast<int>(a.shape(2)) : 1;
@@ -180,6 +181,7 @@ void BindEstimate(py::module_& m) {
         o.model_margin_px = model_margin_px;
         o.min_area_fraction = min_area_fraction;
         o.min_edge_contrast = min_edge_contrast;
+        o.registration_px = registration_px;
         UnmodelledShadows r;
         {
           py::gil_scoped_release release;
@@ -195,6 +197,7 @@ void BindEstimate(py::module_& m) {
           d["centroid_px"] = py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
           d["darkening"] = u.darkening;
           d["edge_contrast"] = u.edge_contrast;
+          d["touches_model"] = u.touches_model;
           regions.append(d);
         }
         py::dict d;
@@ -206,10 +209,10 @@ void BindEstimate(py::module_& m) {
       py::arg("ground").noconvert(), py::arg("model_shadow").noconvert(),
       py::arg("dark_ratio") = 0.7, py::arg("max_chroma_ratio") = 2.5,
       py::arg("model_margin_px") = 2, py::arg("min_area_fraction") = 2e-4,
-      py::arg("min_edge_contrast") = 2.5,
+      py::arg("min_edge_contrast") = 2.5, py::arg("registration_px") = 2,
       "Hard ground shadows the model does not explain: {'mask': uint8 (H,W) 255 on "
       "them, 'regions': [{'area_px', 'box', 'centroid_px', 'darkening', "
-      "'edge_contrast'}]}. frame/background float32 gray (H,W) or linear BGR (H,W,3), "
+      "'edge_contrast', 'touches_model'}]}. frame/background float32 gray (H,W) or linear BGR (H,W,3), "
       "background None for the frame alone; "
       "ground/model_shadow uint8 (H,W) masks.");
 

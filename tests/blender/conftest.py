@@ -33,19 +33,20 @@ def native():
 _generated = {}
 
 
-def generate_preset(preset, tmp_path_factory):
+def generate_preset(preset, tmp_path_factory, *extra):
     """Renders a tiny preset once per test session; returns (folder, truth)."""
     import subprocess
     from sunlapse.core import trackfile
-    if preset not in _generated:
+    key = (preset,) + extra
+    if key not in _generated:
         out = str(tmp_path_factory.mktemp(preset))
         cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
                "--python", os.path.join(ROOT, "examples", "generate_scene.py"), "--",
-               "--preset", preset, "--out", out, "--tiny"]
+               "--preset", preset, "--out", out, "--tiny", *extra]
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-        _generated[preset] = out
-    out = _generated[preset]
+        _generated[key] = out
+    out = _generated[key]
     return out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
 
 

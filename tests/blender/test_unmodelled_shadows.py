@@ -1,13 +1,23 @@
-"""Shadows of casters the artist did not model: found on the anchor frame,
-recorded in the track file and turned into a hint (the tiny plaza's footage
-has a bin that its scene.blend lacks)."""
+"""Shadows of casters the artist did not model: found on the anchor frame
+against the clip's shadow-free background, recorded in the track file and
+turned into a hint (the plaza's footage has a bin its scene.blend lacks)."""
 import json
 import os
 
 import bpy
 import numpy as np
+import pytest
 
+from conftest import generate_preset
 from test_addon import run_estimate
+
+
+@pytest.fixture(scope="session")
+def long_plaza(tmp_path_factory):
+    # Five small frames 40 minutes apart: the shadows move between them, so
+    # their median is the ground without shadows.
+    return generate_preset("plaza", tmp_path_factory, "--frames", "5", "--minutes-per-frame", "40",
+                           "--resolution", "256x192")
 
 
 def truth_mask(out, truth, frame):
@@ -19,8 +29,8 @@ def truth_mask(out, truth, frame):
         bpy.data.images.remove(img)
 
 
-def test_run_notes_the_shadow_of_a_caster_missing_from_the_model(tiny_plaza, tmp_path):
-    out, truth = tiny_plaza
+def test_run_notes_the_shadow_of_a_caster_missing_from_the_model(long_plaza, tmp_path):
+    out, truth = long_plaza
     assert truth.extra["footage_only_objects"] == ["Bin"]
     track_path = str(tmp_path / "t.sun.json")
     proc = run_estimate(os.path.join(out, "scene.blend"), track_path)
@@ -36,3 +46,15 @@ def test_run_notes_the_shadow_of_a_caster_missing_from_the_model(tiny_plaza, tmp
         assert 0 < r["darkening"] < 0.7 and r["edge_contrast"] > 2.5
     assert "not cast by the model" in track["model_hint"]
     assert any(l.startswith("sunlapse: note:") for l in proc.stdout.splitlines())
+
+
+def test_a_clip_too_short_for_a_background_gets_no_note(tiny_plaza, tmp_path):
+    # Three frames two minutes apart: the shadows stay put, so the median
+    # keeps them and cannot tell them from paint; nothing is claimed.
+    out, truth = tiny_plaza
+    track_path = str(tmp_path / "t.sun.json")
+    proc = run_estimate(os.path.join(out, "scene.blend"), track_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    track = json.load(open(track_path))
+    assert "model_hint" not in track
+    assert not track["unmodelled_shadows"].get("regions")

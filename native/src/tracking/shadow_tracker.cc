@@ -391,8 +391,9 @@ struct ShadowTracker::Impl {
   // evaluations of a plain compass search, and a better minimum (1080p
   // benchmark: 28.5 -> 9.5 candidate Suns per frame).
   // Leaves the best Sun's fit in `fit`. The walk goes at most kMaxWalkSteps
-  // first steps from `start`; *escaped says it wanted to go further (the
-  // shadows are not where the band looks: a re-acquisition's job).
+  // first steps (at least search_step_deg each) from `start`; *escaped says
+  // it wanted to go further (the shadows are not where the band looks: a
+  // re-acquisition's job).
   Eigen::Vector3d Search(const Eigen::Vector3d& start, double step_deg, double scale,
                          bool* escaped) {
     *escaped = false;
@@ -422,7 +423,8 @@ struct ShadowTracker::Impl {
       return std::isfinite(*cost_out);
     };
     double h = step_deg * kDeg;
-    const double max_walk = kMaxWalkSteps * h;
+    const double max_walk = kMaxWalkSteps * std::max(h, o.search_step_deg * kDeg);
+    Eigen::Vector2d last_move = Eigen::Vector2d::Zero();
     int guard = 0;
     while (h > o.tolerance_deg * kDeg && guard++ < 100) {
       if (uv.norm() > max_walk) {
@@ -454,10 +456,19 @@ struct ShadowTracker::Impl {
       }
       // A best point at the step's full reach (a neighbour, or a clamped
       // parabola) says the minimum may lie further: keep the step.
-      const bool at_reach = (pick - center).cwiseAbs().maxCoeff() >= h * (1 - 1e-6);
+      // Two such moves the same way: the Sun is further off than the step
+      // guessed (a clip with big jumps between captures), so it doubles.
+      const Eigen::Vector2d move = pick - center;
+      const bool at_reach = move.cwiseAbs().maxCoeff() >= h * (1 - 1e-6);
       uv = pick;
       best = pick_cost;
-      if (!at_reach) h *= kShrink;
+      if (!at_reach) {
+        h *= kShrink;
+        last_move.setZero();
+      } else {
+        if (move.dot(last_move) > 0) h = std::min(2 * h, 4 * o.search_step_deg * kDeg);
+        last_move = move;
+      }
     }
     fit = best_fit;
     return at(uv);
@@ -644,8 +655,10 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
   const Eigen::Vector3d found = s.Search(pred, step, scale, &escaped);  // leaves its fit in s.fit
   if (escaped) {
     ++s.lost;
-    out.reason = "shadow lost: no match within " + std::to_string(static_cast<int>(std::lround(
-                     kMaxWalkSteps * step))) + " deg of the predicted Sun";
+    out.reason = "shadow lost: no match within " +
+                 std::to_string(static_cast<int>(
+                     std::lround(kMaxWalkSteps * std::max(step, s.o.search_step_deg)))) +
+                 " deg of the predicted Sun";
     return finish(pred);
   }
   const double a = s.fit.a[0], b = s.fit.b[0];

@@ -90,6 +90,27 @@ TEST(ShadowTracker, FollowsASunThatJumpsSeveralDegreesPerFrame) {
   EXPECT_LT(worst, 0.5);
 }
 
+// A time-lapse that repeats each capture for several frames (the January
+// sundial clip shows each for 13): the Sun stands still, so the tracker
+// expects no motion, then jumps 3 deg at the next capture.
+TEST(ShadowTracker, FollowsASunThatStandsStillThenJumps) {
+  Fixture fx;
+  ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+  const int captures = 4, repeats = 5;
+  auto sun = [&](int f) { return PathAt(f / repeats, 12); };
+  ASSERT_TRUE(tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, sun(0), Textured(1)),
+                                 sun(0)).ok);
+  double worst = 0;
+  for (int f = 1; f < captures * repeats; ++f) {
+    const TrackedFrame r =
+        tracker.Track(testing::RenderLambertian(fx.scene, fx.cam, sun(f), Textured(f + 1)));
+    ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
+    worst = std::max(worst, AngleDeg(r.sun_in_world, sun(f)));
+  }
+  std::printf("worst error with still Sun and 3 deg jumps: %.3f deg\n", worst);
+  EXPECT_LT(worst, 0.5);
+}
+
 TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
   Fixture fx;
   // The footage has a person-sized box walking across the pole's shadow.

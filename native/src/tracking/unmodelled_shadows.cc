@@ -63,6 +63,7 @@ void UnmodelledShadowOptions::Check() const {
   Require(model_margin_px >= 0 && model_margin_px <= 50, "model_margin_px must be in [0, 50]");
   Require(min_area_fraction >= 0 && min_area_fraction < 1, "min_area_fraction must be in [0, 1)");
   Require(min_edge_contrast >= 0, "min_edge_contrast must be >= 0");
+  Require(registration_px >= 0 && registration_px <= 20, "registration_px must be in [0, 20]");
 }
 
 UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& background,
@@ -82,12 +83,13 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
   UnmodelledShadows out;
   out.mask = cv::Mat1b(H, W, uint8_t(0));
 
+  const cv::Mat& bg = background;
   // Each channel relative to the background (or as it is without one).
   std::vector<cv::Mat1f> rc(frame.channels());
   {
     std::vector<cv::Mat> fc, bc;
     cv::split(frame, fc);
-    if (!background.empty()) cv::split(background, bc);
+    if (!bg.empty()) cv::split(bg, bc);
     for (int c = 0; c < frame.channels(); ++c) {
       if (bc.empty()) {
         rc[c] = fc[c];
@@ -100,22 +102,23 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
   cv::Mat1f ratio;
   const cv::Mat1b on_ground = ground != 0;
   cv::Mat1b valid = on_ground.clone();
-  if (background.empty()) {
+  if (bg.empty()) {
     ratio = f;
   } else {
-    const cv::Mat1f b = Luminance(background);
+    const cv::Mat1f b = Luminance(bg);
     const float b_median = MaskedMedian(b, on_ground);
     if (b_median <= 0) return out;
     valid &= b > 0.05f * b_median;
     cv::divide(f, cv::max(b, 1e-6f), ratio);
   }
 
-  // The model's shadow, widened: explained already.
-  cv::Mat1b model = model_shadow != 0;
+  // The model's shadow, widened: explained already; and a ring around it.
+  cv::Mat1b model = model_shadow != 0, near_model;
   if (o.model_margin_px > 0) {
     const int k = 2 * o.model_margin_px + 1;
     cv::dilate(model, model, cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));
   }
+  cv::dilate(model, near_model, cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5}));
 
   // Lit level around each pixel: the mean over the lit-looking ground in a
   // wide window (pixels darker than dark_ratio x the global median and the
@@ -128,7 +131,17 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
   const int win = std::max(3, static_cast<int>(o.level_window * W) | 1);
   const cv::Mat1f level = LocalLevel(ratio, lit, win, global);
 
-  cv::Mat1b dark = valid & ~model & (ratio < o.dark_ratio * level);
+  // Dark: below dark_ratio x the level even against the darkest background
+  // within registration_px (paint that the camera's shake moved a pixel or
+  // two is dark in the background there too).
+  cv::Mat1f ratio_test = ratio;
+  if (!bg.empty() && o.registration_px > 0) {
+    const int k = 2 * o.registration_px + 1;
+    cv::Mat1f b_min;
+    cv::erode(Luminance(bg), b_min, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+    cv::divide(f, cv::max(b_min, 1e-6f), ratio_test);
+  }
+  cv::Mat1b dark = valid & ~model & (ratio_test < o.dark_ratio * level);
   // Shade dims every channel alike (relative to the lit ground around); a
   // dark or differently coloured thing on the ground does not.
   if (frame.channels() == 3) {
@@ -161,11 +174,13 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
       std::max(12, static_cast<int>(o.min_area_fraction * cv::countNonZero(valid)));
   std::vector<std::vector<float>> rim(n);
   std::vector<double> ratio_sum(n, 0.0);
+  std::vector<uint8_t> touches(n, 0);
   for (int y = 0; y < H; ++y) {
     for (int x = 0; x < W; ++x) {
       const int l = labels(y, x);
       if (l == 0 || stats.at<int>(l, cv::CC_STAT_AREA) < min_area) continue;
       ratio_sum[l] += ratio(y, x) / std::max(1e-6f, level(y, x));
+      touches[l] |= near_model(y, x) != 0;
       const bool inner = x > 0 && y > 0 && x < W - 1 && y < H - 1 && labels(y, x - 1) == l &&
                          labels(y, x + 1) == l && labels(y - 1, x) == l && labels(y + 1, x) == l;
       if (!inner) rim[l].push_back(energy_max(y, x));
@@ -187,6 +202,7 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
     s.centroid_px = {centroids.at<double>(l, 0), centroids.at<double>(l, 1)};
     s.darkening = ratio_sum[l] / area;
     s.edge_contrast = contrast;
+    s.touches_model = touches[l] != 0;
     out.regions.push_back(s);
     out.mask.setTo(255, labels == l);
   }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <opencv2/imgproc.hpp>
+
 #include "synthetic.h"
 
 namespace sunlapse {
@@ -115,6 +117,7 @@ TEST(UnmodelledShadows, FindsTheShadowOfACasterMissingFromTheModel) {
   EXPECT_EQ(r.regions.size(), 1u);
   EXPECT_LT(r.regions[0].darkening, 0.5);
   EXPECT_GT(r.regions[0].edge_contrast, 2.5);
+  EXPECT_FALSE(r.regions[0].touches_model);  // the bin stands apart
 }
 
 TEST(UnmodelledShadows, FindsItInOneFrameWithoutABackground) {
@@ -146,6 +149,15 @@ TEST(UnmodelledShadows, ReportsNothingWhenTheModelExplainsEveryShadow) {
       frame, fx.Background(fx.model), fx.ground, cv::Mat1b(fx.ground.size(), uint8_t(0)));
   EXPECT_FALSE(all.regions.empty());
   EXPECT_GT(Share(fx.model_shadow, all.mask), 0.7);
+  // Told of a Sun a little off, the true shadow's uncovered part is found
+  // but marked as bordering the model's (misplaced) shadow.
+  cv::Mat1b shifted;
+  cv::warpAffine(fx.model_shadow, shifted, cv::Matx23d(1, 0, 12, 0, 1, 0), fx.model_shadow.size(),
+                 cv::INTER_NEAREST);
+  const UnmodelledShadows off = DetectUnmodelledShadows(frame, fx.Background(fx.model), fx.ground,
+                                                        shifted & fx.ground);
+  ASSERT_FALSE(off.regions.empty());
+  for (const UnmodelledShadow& u : off.regions) EXPECT_TRUE(u.touches_model) << u.area_px;
 }
 
 TEST(UnmodelledShadows, ASoftDarkeningIsNotAHardShadow) {

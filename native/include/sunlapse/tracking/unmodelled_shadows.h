@@ -42,6 +42,10 @@ struct UnmodelledShadowOptions {
   double min_area_fraction = 2e-4;
   // Hard edge: mean rim energy at least this many times the ground's median.
   double min_edge_contrast = 2.5;
+  // The frame is compared with the darkest background within this many
+  // pixels: a camera that shook a little between captures does not turn
+  // dark paint or engravings into "shadows".
+  int registration_px = 2;
 
   void Check() const;
 };
@@ -52,6 +56,9 @@ struct UnmodelledShadow {
   Eigen::Vector2d centroid_px;
   double darkening = 0;     // mean ratio to the lit level inside (0..1)
   double edge_contrast = 0; // rim energy / ground median energy
+  // It borders the model's predicted shadow (within model_margin_px + 2):
+  // it may be part of a modelled shadow that the Sun used puts a little off.
+  bool touches_model = false;
 };
 
 struct UnmodelledShadows {
