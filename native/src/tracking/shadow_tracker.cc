@@ -18,7 +18,7 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 // Frames tracked from the recorded edge casters before the boundaries are
 // searched afresh around the last ones.
-constexpr int kRefreshFrames = 8;
+constexpr int kRefreshFrames = 16;
 // Step factor between the search's levels: the parabolas place the minimum
 // well inside a step, so the steps may shrink faster than halving.
 constexpr double kShrink = 0.4;
