@@ -62,9 +62,10 @@ struct ShadowTracker::Impl {
   // Everything a ground pixel needs in one cache line: the band's pixels
   // are scattered over the frame, and separate arrays cost a miss each.
   struct GroundPixel {
-    Eigen::Vector3f origin;            // point lifted along the normal
-    Eigen::Vector3f normal;
-    Eigen::Vector3f dpdx, dpdy;        // ground point per pixel step
+    Eigen::Vector3f origin = Eigen::Vector3f::Zero();  // lifted along the normal
+    Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
+    Eigen::Vector3f dpdx = Eigen::Vector3f::Zero();    // ground point per pixel step
+    Eigen::Vector3f dpdy = Eigen::Vector3f::Zero();
     float albedo = 1.f;                // relative, median 1
     cv::Point px;
   };
