@@ -75,27 +75,41 @@ def clip_background(frames: Sequence[np.ndarray], rows_per_chunk: int = 64) -> O
     return out
 
 
+def spread(frames: Sequence[int], n: int = BACKGROUND_SAMPLES) -> List[int]:
+    """Up to n of `frames`, evenly spread from the first to the last."""
+    k = min(n, len(frames))
+    return sorted({frames[round(i * (len(frames) - 1) / max(1, k - 1))] for i in range(k)})
+
+
+def ground_samples(scene, camera, ground_ids: Sequence[int], rows, cols):
+    """Of the pixels (rows, cols), those that see the model's ground: their
+    mask over the inputs and their ground points, lifted off the surface
+    along the normal so that shadow rays do not hit it."""
+    pixels = np.ascontiguousarray(np.stack([cols, rows], axis=1).astype(np.float64))
+    hits = scene.intersect_pixels(camera, pixels)
+    on = np.isin(hits["object_id"], np.asarray(list(ground_ids), dtype=np.int32))
+    scale = max(1e-3, float(np.max(np.abs(hits["point"][on])))) if on.any() else 1.0
+    origins = (hits["point"][on] + 1e-4 * scale * hits["normal"][on]).astype(np.float32)
+    return on, np.ascontiguousarray(origins)
+
+
 def ground_and_model_shadow(scene, camera, ground_ids: Sequence[int], sun_in_world,
                             top: int = 0):
     """Dense uint8 masks (H x W, 255 = set): the model's ground as the camera
-    sees it, and the model's cast shadow on it toward `sun_in_world`."""
+    sees it (below row `top`), and the model's cast shadow on it toward
+    `sun_in_world`."""
     h, w = camera.height, camera.width
-    ys, xs = np.mgrid[0:h, 0:w]
-    pixels = np.ascontiguousarray(np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float64))
-    hits = scene.intersect_pixels(camera, pixels)
-    on = np.isin(hits["object_id"], np.asarray(list(ground_ids), dtype=np.int32))
-    on &= ys.ravel() >= top
-    scale = max(1e-3, float(np.max(np.abs(hits["point"][on])))) if on.any() else 1.0
-    origins = (hits["point"][on] + 1e-4 * scale * hits["normal"][on]).astype(np.float32)
+    ys, xs = np.mgrid[top:h, 0:w]
+    on, origins = ground_samples(scene, camera, ground_ids, ys.ravel(), xs.ravel())
     d = np.asarray(sun_in_world, dtype=np.float32)
-    occ = scene.occluded(np.ascontiguousarray(origins),
-                         np.ascontiguousarray(np.tile(d, (len(origins), 1))))
-    ground = np.zeros(h * w, dtype=np.uint8)
-    shadow = np.zeros(h * w, dtype=np.uint8)
+    occ = scene.occluded(origins, np.ascontiguousarray(np.tile(d, (len(origins), 1))))
+    ground = np.zeros((h - top) * w, dtype=np.uint8)
+    shadow = np.zeros((h - top) * w, dtype=np.uint8)
     ground[on] = 255
-    idx = np.flatnonzero(on)
-    shadow[idx[occ.astype(bool)]] = 255
-    return ground.reshape(h, w), shadow.reshape(h, w)
+    shadow[np.flatnonzero(on)[occ.astype(bool)]] = 255
+    pad = np.zeros((top, w), dtype=np.uint8)
+    return (np.vstack([pad, ground.reshape(h - top, w)]),
+            np.vstack([pad, shadow.reshape(h - top, w)]))
 
 
 def fibonacci_sky(n: int, min_elevation_deg: float = 1.0) -> np.ndarray:
@@ -131,15 +145,10 @@ class ShadowSearch:
         h, w = camera.height, camera.width
         step = max(1, int(math.ceil(math.sqrt((h - top) * w / max_pixels))))
         ys, xs = np.mgrid[top:h:step, 0:w:step]
-        pixels = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float64)
-        hits = scene.intersect_pixels(camera, pixels)
-        ok = np.isin(hits["object_id"], np.asarray(list(ground_ids), dtype=np.int32))
+        ok, self.origins = ground_samples(scene, camera, ground_ids, ys.ravel(), xs.ravel())
         self.scene = scene
         self.rows = ys.ravel()[ok].astype(np.int64)
         self.cols = xs.ravel()[ok].astype(np.int64)
-        normal = hits["normal"][ok].astype(np.float32)
-        scale = max(1e-3, float(np.max(np.abs(hits["point"][ok])))) if ok.any() else 1.0
-        self.origins = (hits["point"][ok] + 1e-4 * scale * normal).astype(np.float32)
 
     def __len__(self):
         return len(self.rows)

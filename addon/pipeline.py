@@ -262,8 +262,7 @@ class _ShadowSearchLazy:
 
     def _build(self):
         scene, camera, clip_path, clip_frame_start, frames, options = self.args
-        n = min(acquire.BACKGROUND_SAMPLES, len(frames))
-        picks = sorted({frames[round(i * (len(frames) - 1) / max(1, n - 1))] for i in range(n)})
+        picks = acquire.spread(frames)
         grays = []
         reader = open_clip(clip_path, picks[0] - clip_frame_start)  # one reader, seeking
         for f in picks:
@@ -397,9 +396,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
 
     # A few frames spread over the clip, kept as they stream past, make its
     # shadow-free background (for the unmodelled-shadow note); bounded memory.
-    n_samples = min(acquire.BACKGROUND_SAMPLES, len(frames))
-    sample_at = {frames[round(i * (len(frames) - 1) / max(1, n_samples - 1))]
-                 for i in range(n_samples)} if options.method != "thesis" else set()
+    sample_at = set(acquire.spread(frames)) if options.method != "thesis" else set()
     samples = {visit[anchor]: anchor_bgr} if visit[anchor] in sample_at else {}
 
     if options.method == "thesis":
@@ -429,7 +426,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
             return
         gray = None if bgr is None else _gray(bgr, camera, options.method)
         if bgr is not None and f in sample_at:
-            samples[f] = bgr.copy()
+            samples[f] = bgr  # a fresh array per read
         r = tracker.track(gray)
         track_seconds += r.seconds
         doubtful = not r.ok or r.confidence < DOUBTFUL_CONFIDENCE

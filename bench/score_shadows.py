@@ -78,9 +78,7 @@ def main(track_path, truth_path):
     scene = bridge.build_scene(model)
     ground_ids = model.ids_of(truth.extra.get("ground_objects", ["Ground"]))
     masks = sorted(truth.extra.get("shadow_masks", {}).items(), key=lambda kv: int(kv[0]))
-    n = len(truth.frames)
-    k = min(acquire.BACKGROUND_SAMPLES, n)
-    samples = sorted({truth.frames[round(i * (n - 1) / max(1, k - 1))].frame for i in range(k)})
+    samples = acquire.spread([f.frame for f in truth.frames])
     bgr = clip_frames(clip, sorted(set(samples) | {int(f) for f, _ in masks}))
     rows = []
     for frame, rel in masks:
