@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from core import smoothing
+from core import evaluation, smoothing
 
 
 def noisy_path(n=120, seed=0, drop=()):
@@ -118,3 +118,57 @@ def test_online_over_capture_times_is_causal_in_time():
 def test_times_must_match_frames():
     with pytest.raises(ValueError, match="times"):
         smoothing.smooth_angles([1, 2], [1.0, 2.0], [1.0, 2.0], None, "two_pass", times_s=[0.0])
+
+
+def near_zenith_path(n=120, seed=5, lat=15.0, dec=20.0, noise=0.3):
+    """A morning at the tropics: the Sun turns uniformly about the celestial
+    pole and climbs to 6 deg from the zenith, where its azimuth swings fast.
+    Raw Suns carry 0.3 deg of direction noise."""
+    phi, d = np.radians(lat), np.radians(dec)
+    pole = np.array([0, np.cos(phi), np.sin(phi)])
+    meridian = np.array([0, -np.sin(phi), np.cos(phi)])
+    west = np.array([-1.0, 0, 0])
+    h = np.radians(np.linspace(-60, -4, n))
+    v = np.sin(d) * pole + np.cos(d) * (np.cos(h)[:, None] * meridian + np.sin(h)[:, None] * west)
+    rng = np.random.default_rng(seed)
+    noisy = v + np.radians(noise) * rng.normal(size=v.shape)
+    noisy /= np.linalg.norm(noisy, axis=1, keepdims=True)
+
+    def angles(u):
+        return (np.degrees(np.arccos(u[:, 2])), np.degrees(np.arctan2(u[:, 0], u[:, 1])) % 360)
+    zen, azi = angles(v)
+    zn, an = angles(noisy)
+    return list(range(1, n + 1)), zen, azi, list(zn), list(an)
+
+
+def direction_errors(z, a, zen, azi):
+    return np.array([evaluation.angle_between_deg(evaluation.direction(z1, a1),
+                                                  evaluation.direction(z2, a2))
+                     for z1, a1, z2, a2 in zip(z, a, zen, azi)])
+
+
+def test_two_pass_in_directions_follows_the_sun_near_the_zenith():
+    frames, zen, azi, zn, an = near_zenith_path()
+    assert zen.min() < 7
+    w = [1.0] * len(frames)
+    z, a = smoothing.smooth_angles(frames, zn, an, w, "two_pass", degree=3, space="directions")
+    d = direction_errors(z, a, zen, azi)
+    assert d.mean() < 0.1 and d.max() < 0.3
+    assert np.max(az_err(a, azi)) < 1.0
+    # A cubic per angle cannot follow the azimuth's swing by the zenith.
+    z_a, a_a = smoothing.smooth_angles(frames, zn, an, w, "two_pass", degree=3)
+    assert np.max(az_err(a_a, azi)) > 3 * np.max(az_err(a, azi))
+
+
+def test_two_pass_in_directions_ignores_outliers_and_fills_gaps():
+    frames, zen, azi, zn, an = near_zenith_path(seed=6)
+    zn[40], an[40] = 70.0, 200.0                  # a gross tracking failure
+    zn[70] = an[70] = None                        # a frame without estimate
+    z, a = smoothing.two_pass_directions(frames, zn, an, [1.0] * len(frames))
+    assert all(v is not None for v in z + a)
+    assert direction_errors(z, a, zen, azi).max() < 0.3
+
+
+def test_unknown_space_is_an_error():
+    with pytest.raises(ValueError, match="smoothing space"):
+        smoothing.smooth_angles([1], [1.0], [1.0], [1.0], "two_pass", space="sphere")
