@@ -402,25 +402,28 @@ void Scene::OccludedToward(int64_t n, const float* origins,
         ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
         alignas(64) RTCRay16 rays;
         alignas(64) int valid[kPacket];
+        // What all rays share is set once per task; Embree writes only tfar.
+        for (int k = 0; k < kPacket; ++k) {
+          rays.dir_x[k] = d.x();
+          rays.dir_y[k] = d.y();
+          rays.dir_z[k] = d.z();
+          rays.tnear[k] = t_near;
+          rays.time[k] = 0.f;
+          rays.mask[k] = 0xFFFFFFFFu;
+          rays.id[k] = 0;
+          rays.flags[k] = 0;
+        }
         for (int64_t p = r.begin(); p < r.end(); ++p) {
           const int64_t base = p * kPacket;
           for (int k = 0; k < kPacket; ++k) {
             const int64_t i = base + k;
-            const float* o = i < n ? origins + 3 * i : nullptr;
-            float norm;
-            valid[k] = (o && ValidRay(o, d.data(), &norm)) ? -1 : 0;
+            const float* o = origins + 3 * std::min(i, n - 1);
+            valid[k] = (i < n && std::isfinite(o[0]) && std::isfinite(o[1]) &&
+                        std::isfinite(o[2])) ? -1 : 0;
             rays.org_x[k] = valid[k] ? o[0] : 0.f;
             rays.org_y[k] = valid[k] ? o[1] : 0.f;
             rays.org_z[k] = valid[k] ? o[2] : 0.f;
-            rays.dir_x[k] = d.x();
-            rays.dir_y[k] = d.y();
-            rays.dir_z[k] = d.z();
-            rays.tnear[k] = t_near;
             rays.tfar[k] = t_far;
-            rays.time[k] = 0.f;
-            rays.mask[k] = 0xFFFFFFFFu;
-            rays.id[k] = 0;
-            rays.flags[k] = 0;
           }
           rtcOccluded16(valid, scene, &ctx, &rays);
           for (int k = 0; k < kPacket && base + k < n; ++k) {
