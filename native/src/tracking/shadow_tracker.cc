@@ -91,8 +91,8 @@ struct ShadowTracker::Impl {
   std::vector<int> tag, slot;
   int epoch = 0;
 
-  // Work buffers: band_origin/band_normal per sub-pixel ray (subsamples^2
-  // per pixel), band_x/band_y per band pixel.
+  // Work buffers: band_origin per sub-pixel ray (subsamples^2 per pixel),
+  // band_normal/band_x/band_y per band pixel.
   std::vector<float> band_origin, band_x, band_y;
   std::vector<Eigen::Vector3f> band_normal;
   std::vector<uint8_t> occluded;
@@ -354,30 +354,28 @@ struct ShadowTracker::Impl {
           const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
           const Eigen::Vector3f q = gp.origin + ox * gp.dpdx + oy * gp.dpdy;
           band_origin.insert(band_origin.end(), {q.x(), q.y(), q.z()});
-          band_normal.push_back(gp.normal);
         }
       }
+      band_normal.push_back(gp.normal);
       const float v = frame.at<float>(gp.px);
       band_y.push_back(o.normalize_albedo ? v / gp.albedo : v);
     }
     band_x.resize(band_y.size());
-    occluded.resize(band_normal.size());
+    occluded.resize(band_origin.size() / 3);
   }
 
   double Cost(const Eigen::Vector3d& toward_sun, double scale) {
     const Eigen::Vector3f d = toward_sun.cast<float>();
-    const int rays = static_cast<int>(band_normal.size());
+    const int rays = static_cast<int>(occluded.size());
     scene.OccludedToward(rays, band_origin.data(), d, 0.f, kInf, occluded.data());
     rays_cast += rays;
     ++evaluations;
     const int per_pixel = o.subsamples * o.subsamples;
+    // A pixel's shading: its lit fraction (of its sub-pixel rays) times n.d.
     for (size_t i = 0; i < band_x.size(); ++i) {
-      float sum = 0;
-      for (int r = 0; r < per_pixel; ++r) {
-        const size_t j = i * per_pixel + r;
-        sum += occluded[j] ? 0.f : std::max(0.f, band_normal[j].dot(d));
-      }
-      band_x[i] = sum / per_pixel;
+      int lit = 0;
+      for (int r = 0; r < per_pixel; ++r) lit += !occluded[i * per_pixel + r];
+      band_x[i] = lit * std::max(0.f, band_normal[i].dot(d)) / per_pixel;
     }
     const int n = static_cast<int>(band_y.size());
     RobustAffineFit(n, band_x.data(), band_y.data(), nullptr, 1, scale, 3, &fit);
