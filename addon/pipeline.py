@@ -445,9 +445,24 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
             if not again["success"] or again["confidence"] <= 0.3:
                 again = search.run(gray) or again
             if again["success"] and again["confidence"] > 0.3:
-                if r.ok and evaluation.angle_between_deg(again["sun_in_world"], r.sun_in_world) < REACQUIRE_AGREE_DEG:
+                agree = r.ok and evaluation.angle_between_deg(
+                    again["sun_in_world"], r.sun_in_world) < REACQUIRE_AGREE_DEG
+                if agree:
                     reacquire_after = min(2 * reacquire_after, REACQUIRE_MAX)
                 first = tracker.initialize(gray, again["sun_in_world"])
+                if first.ok and r.ok and not agree:
+                    # The tracker held on, doubtfully, and the fresh search
+                    # disagrees: the frame decides, by which Sun's shadows
+                    # part lit from shaded ground better (the sun/ambient
+                    # contrast of the robust fit over the whole ground).
+                    mine = tracker.initialize(gray, r.sun_in_world)
+                    if mine.ok and mine.contrast >= first.contrast:
+                        reacquire_after = min(2 * reacquire_after, REACQUIRE_MAX)
+                        lost = 0
+                        raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0,
+                                     r.confidence, None, r))
+                        return
+                    first = tracker.initialize(gray, again["sun_in_world"])
                 if first.ok:
                     reacquired.append(f)
                     lost = 0

@@ -70,6 +70,32 @@ TEST(ShadowTracker, FollowsRotatingAndShorteningShadowsWithinHalfADegree) {
   EXPECT_LT(worst, 0.5);
 }
 
+// The run decides between a doubtful tracker's Sun and a re-acquired one
+// more than 2 deg from it by the contrast Initialize fits over the whole
+// ground: the true Sun's shadows part lit from shaded ground best, so it must
+// score highest against Suns 2-5 deg off either way. (At 1 deg a lower Sun
+// can score a little higher: its smaller n.d raises the fitted slope.)
+TEST(ShadowTracker, InitializeContrastPrefersTheTrueSun) {
+  Fixture fx;
+  const Eigen::Vector3d truth = PathAt(10, 40);
+  const cv::Mat img = testing::RenderLambertian(fx.scene, fx.cam, truth, Textured(3));
+  auto contrast = [&](const Eigen::Vector3d& sun) {
+    ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+    const TrackedFrame r = tracker.Initialize(img, sun);
+    EXPECT_TRUE(r.ok) << r.reason;
+    return r.contrast;
+  };
+  const double best = contrast(truth);
+  for (double deg : {-5.0, -3.0, -2.0, 2.0, 3.0, 5.0}) {
+    // Off in azimuth (about the vertical) and in zenith (about the horizontal).
+    const Eigen::Vector3d axes[2] = {Eigen::Vector3d::UnitZ(), truth.cross(Eigen::Vector3d::UnitZ())};
+    for (const Eigen::Vector3d& axis : axes) {
+      const Eigen::Vector3d off = Eigen::AngleAxisd(deg * M_PI / 180, axis.normalized()) * truth;
+      EXPECT_GT(best, contrast(off)) << deg << " deg off about " << axis.transpose();
+    }
+  }
+}
+
 // A clip with few, far-apart captures: the Sun jumps about 3 deg per frame,
 // so the shadows' edges move many pixels between frames and the band must be
 // found where the recorded caster points put them, not where they were.
