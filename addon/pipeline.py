@@ -21,9 +21,10 @@ GAMMA = {"thesis": 1.0, "default": 2.2}
 # Two-pass smoothing: the thesis fits straight lines; over hours the Sun's
 # angles bend, so ours allows a cubic.
 TWO_PASS_DEGREE = {"thesis": 1, "default": 3}
-# ... and fits the Sun's direction, not each angle: near the zenith the
-# azimuth is no low polynomial of time (core.smoothing.two_pass_directions).
-TWO_PASS_SPACE = {"thesis": "angles", "default": "directions"}
+# Ours smooths the Sun's direction, not each angle (both the two-pass and the
+# online mode): near the zenith the azimuth swings too fast for either
+# (core.smoothing.two_pass_directions, online_directions).
+SMOOTHING_SPACE = {"thesis": "angles", "default": "directions"}
 # Consecutive frames without shadows (that do show the scene) before the Sun
 # is searched for again from scratch.
 REACQUIRE_AFTER = 2
@@ -502,7 +503,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         zs, azs = smoothing.smooth_angles(
             numbers, [r[1] for r in raws], [r[2] for r in raws], [r[3] for r in raws],
-            mode, degree=TWO_PASS_DEGREE[options.method], space=TWO_PASS_SPACE[options.method],
+            mode, degree=TWO_PASS_DEGREE[options.method], space=SMOOTHING_SPACE[options.method],
             times_s=None if times is None else frametimes.seconds_since(times))
     for k, ((f, z, a, conf, reason, res), zs_f, as_f) in enumerate(zip(raws, zs, azs)):
         est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,

@@ -172,3 +172,21 @@ def test_two_pass_in_directions_ignores_outliers_and_fills_gaps():
 def test_unknown_space_is_an_error():
     with pytest.raises(ValueError, match="smoothing space"):
         smoothing.smooth_angles([1], [1.0], [1.0], [1.0], "two_pass", space="sphere")
+
+
+def test_online_in_directions_follows_the_sun_near_the_zenith_causally():
+    frames, zen, azi, zn, an = near_zenith_path(seed=7)
+    w = [1.0] * len(frames)
+    zn[5] = an[5] = None                          # a frame without estimate
+    z, a = smoothing.smooth_angles(frames, zn, an, w, "online", space="directions")
+    assert all(v is not None for v in z + a)
+    d = direction_errors(z[20:], a[20:], zen[20:], azi[20:])
+    assert d.mean() < 0.3 and d.max() < 0.6
+    # Per angle, the azimuth lags through its swing by the zenith.
+    _, a_a = smoothing.smooth_angles(frames, zn, an, w, "online")
+    assert np.max(az_err(a_a[20:], azi[20:])) > 2 * np.max(az_err(a[20:], azi[20:]))
+    # Causal: a later sample changes nothing before it.
+    zn2 = list(zn)
+    zn2[100] = 40.0
+    z2, a2 = smoothing.smooth_angles(frames, zn2, an, w, "online", space="directions")
+    assert z2[:100] == z[:100] and a2[:100] == a[:100]
