@@ -72,6 +72,8 @@ struct ShadowTracker::Impl {
   std::vector<GroundPixel> ground;
   std::vector<internal::Caster> casters;
 
+  bool mapped = false;                 // ground and casters made (once)
+
   // Tracking state.
   bool initialized = false;
   Eigen::Vector3d sun, sun_before;     // last two accepted Suns
@@ -541,8 +543,15 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector
   const auto t0 = std::chrono::steady_clock::now();
   TrackedFrame out;
   const Eigen::Vector3d d = sun_in_world.normalized();
-  s.MapGround();
-  s.casters = internal::FindCasters(s.scene, s.o.ground_object_ids);
+  // The ground map and the casters depend on the scene and the camera only:
+  // made on the first call, reused by re-initialisations (a run re-acquires
+  // the Sun tens of times on a hard clip); the albedo is the frame's own.
+  if (!s.mapped) {
+    s.MapGround();
+    s.casters = internal::FindCasters(s.scene, s.o.ground_object_ids);
+    s.mapped = true;
+  }
+  for (auto& gp : s.ground) gp.albedo = 1.f;
   s.sun = s.sun_before = d;
   s.have_velocity = false;
   s.lost = 0;

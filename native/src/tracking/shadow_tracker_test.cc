@@ -96,6 +96,26 @@ TEST(ShadowTracker, InitializeContrastPrefersTheTrueSun) {
   }
 }
 
+// A run re-initialises its tracker at every re-acquisition: a tracker
+// initialised again tracks exactly as a fresh one (nothing piles up).
+TEST(ShadowTracker, ReinitialisedTrackerTracksAsAFreshOne) {
+  Fixture fx;
+  const int n = 40;
+  const cv::Mat f0 = testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
+  const cv::Mat f1 = testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
+  const cv::Mat f2 = testing::RenderLambertian(fx.scene, fx.cam, PathAt(2, n), Textured(3));
+  ShadowTracker fresh(fx.scene, fx.cam, fx.Options()), again(fx.scene, fx.cam, fx.Options());
+  ASSERT_TRUE(fresh.Initialize(f1, PathAt(1, n)).ok);
+  ASSERT_TRUE(again.Initialize(f0, PathAt(0, n)).ok);
+  again.Track(f1);
+  ASSERT_TRUE(again.Initialize(f1, PathAt(1, n)).ok);
+  const TrackedFrame a = fresh.Track(f2), b = again.Track(f2);
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_EQ(a.rays, b.rays);
+  EXPECT_EQ(a.band_pixels, b.band_pixels);
+  EXPECT_EQ(a.sun_in_world, b.sun_in_world);
+}
+
 // A clip with few, far-apart captures: the Sun jumps about 3 deg per frame,
 // so the shadows' edges move many pixels between frames and the band must be
 // found where the recorded caster points put them, not where they were.
