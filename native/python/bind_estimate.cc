@@ -40,12 +40,26 @@ InitialSunMethod ParseMethod(const std::string& m) {
   throw std::invalid_argument("method: expected 'thesis' or 'default', got '" + m + "'");
 }
 
+// A cv::Mat viewing (not copying) a checked numpy image: float32 (H,W), or
+// (H,W,3) too with `colour`.
+cv::Mat FloatView(const py::array& a, const char* name, bool colour = false) {
+  const bool three = colour && a.ndim() == 3;
+  const float* data = three ? CheckArray<float>(a, name, {-1, -1, 3})
+                            : CheckArray<float>(a, name, {-1, -1});
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                 CV_32FC(three ? 3 : 1), const_cast<float*>(data));
+}
+
+// The same for a uint8 (H,W) mask.
+cv::Mat MaskView(const py::array& a, const char* name) {
+  const uint8_t* data = CheckArray<uint8_t>(a, name, {-1, -1});
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_8UC1,
+                 const_cast<uint8_t*>(data));
+}
+
 cv::Mat GrayArg(const py::object& frame) {
   if (frame.is_none()) return {};  // an undecodable frame
-  const py::array a = frame.cast<py::array>();
-  const float* data = CheckArray<float>(a, "frame", {-1, -1});
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_32F,
-                 const_cast<float*>(data));
+  return FloatView(frame.cast<py::array>(), "frame");
 }
 
 
@@ -159,22 +173,11 @@ void BindEstimate(py::module_& m) {
          int model_margin_px, double min_area_fraction, double min_edge_contrast,
          int registration_px) {
         // float32 (H,W) gray or (H,W,3) linear BGR; masks uint8 (H,W).
-        auto image = [](const py::array& a, const char* name) {
-          const int channels = a.ndim() == 3 ? static_cast<int>(a.shape(2)) : 1;
-          const float* data = a.ndim() == 3 ? CheckArray<float>(a, name, {-1, -1, 3})
-                                            : CheckArray<float>(a, name, {-1, -1});
-          return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
-                         CV_32FC(channels), const_cast<float*>(data));
-        };
-        auto mask = [](const py::array& a, const char* name) {
-          const uint8_t* data = CheckArray<uint8_t>(a, name, {-1, -1});
-          return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_8UC1,
-                         const_cast<uint8_t*>(data));
-        };
-        const cv::Mat f = image(frame, "frame");
-        const cv::Mat b = background.is_none() ? cv::Mat()
-                                               : image(background.cast<py::array>(), "background");
-        const cv::Mat g = mask(ground, "ground"), s = mask(model_shadow, "model_shadow");
+        const cv::Mat f = FloatView(frame, "frame", true);
+        const cv::Mat b = background.is_none()
+                              ? cv::Mat()
+                              : FloatView(background.cast<py::array>(), "background", true);
+        const cv::Mat g = MaskView(ground, "ground"), s = MaskView(model_shadow, "model_shadow");
         UnmodelledShadowOptions o;
         o.dark_ratio = dark_ratio;
         o.max_chroma_ratio = max_chroma_ratio;
@@ -236,9 +239,7 @@ void BindEstimate(py::module_& m) {
          const std::string& method, int max_pixels, int ignore_top_rows,
          int ignore_bottom_rows, int num_candidates, double loss_scale,
          bool per_object_albedo, int thesis_num_lights, const py::object& progress) {
-        const float* data = CheckArray<float>(frame, "frame", {-1, -1});
-        const cv::Mat img(static_cast<int>(frame.shape(0)), static_cast<int>(frame.shape(1)),
-                          CV_32F, const_cast<float*>(data));
+        const cv::Mat img = FloatView(frame, "frame");
         InitialSunOptions o;
         o.method = ParseMethod(method);
         o.max_pixels = max_pixels;
