@@ -1,0 +1,74 @@
+// The Sun's path over a clip, chosen globally from every frame's evidence.
+//
+// A Viterbi search over the sky grid: each frame's cost is how much less its
+// evidence explains than its best direction, each step's cost grows with the
+// angle the Sun moves (bounded by how far it can move in the time between the
+// two frames: 15 deg per hour, or a generous bound when times are unknown).
+// No frame decides alone: an ambiguous or broken frame is carried by its
+// neighbours, and a wrong start cannot propagate. A time jump the caller does
+// not know of (a looped clip, a missing night) is allowed as a costly jump
+// anywhere, and reported so smoothing never crosses it.
+//
+// Departure from the thesis: the thesis estimates the Sun once on frame 1 and
+// tracks it frame by frame; a bad first frame or one lost frame derails it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sunlapse/sky/sky_evidence.h"
+
+namespace sunlapse {
+
+struct SunPathOptions {
+  // Weight of the evidence's costs (sky_evidence.h: log-likelihood units).
+  double evidence_weight = 1.0;
+  // Cost of a step of the whole allowed radius (grows with its square).
+  double step_weight = 1.0;
+  // Cost of a jump beyond the allowed radius (a time jump in the clip).
+  // Negative: jumps are not allowed.
+  double jump_cost = 20.0;
+  // Largest Sun motion per frame when the frames' times are unknown (deg).
+  double max_step_deg = 6.0;
+  // Apparent angular speed bound of the Sun (deg per hour) when times are
+  // known, plus the grid's quantisation (1.5 spacings) as slack.
+  double max_speed_deg_per_hour = 15.5;
+  // A frame counts as measured when its best direction explains at least
+  // this share of the frame's variance and the chosen one leads every
+  // direction rival_exclusion_deg away by min_margin (log-likelihood).
+  double min_explained = 0.05;
+  double min_margin = 2.0;
+  double rival_exclusion_deg = 12.0;
+
+  void Check() const;
+};
+
+struct SunPathResult {
+  enum class Status {
+    kSuccess,     // a path through every frame
+    kNoEvidence,  // no frame has evidence for any direction
+  };
+  Status status = Status::kNoEvidence;
+  std::string message;
+  // Per frame: grid direction (-1 when the segment has no evidence at all),
+  // whether a jump (unknown time jump) or a segment start precedes it, and
+  // whether the frame's own evidence supports the chosen direction.
+  std::vector<int> direction;
+  std::vector<uint8_t> jump_before;
+  std::vector<uint8_t> measured;
+  // Per frame: the best explained share of the frame (0..1), and the chosen
+  // direction's lead over the best direction rival_exclusion_deg away from it
+  // (log-likelihood; negative when a far direction fits the frame better).
+  std::vector<float> explained;
+  std::vector<float> margin;
+  double cost = 0.0;
+};
+
+// frames: the evidence's frames in order; times_s: each frame's capture time
+// in seconds (NaN when unknown); segment_start: 1 where the caller knows the
+// clip jumps (capture times going back, a cut) and no step is taken.
+SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double>& times_s,
+                           const std::vector<uint8_t>& segment_start,
+                           const SunPathOptions& options);
+
+}  // namespace sunlapse

@@ -1,0 +1,391 @@
+#include "sunlapse/sky/sky_evidence.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <tuple>
+
+#include <tbb/parallel_for.h>
+
+namespace sunlapse {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+void Require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument(message);
+}
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- SkyGrid
+
+SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
+  Require(num_directions >= 16, "num_directions must be >= 16");
+  Require(max_zenith_deg > 0 && max_zenith_deg <= 90, "max_zenith_deg must be in (0, 90]");
+  const double zmin = std::cos(max_zenith_deg * kDeg);
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < num_directions; ++k) {
+    const double z = 1.0 - (k + 0.5) / num_directions * (1.0 - zmin);
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    directions_.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
+  }
+  // Solid angle per direction -> the side of a square of that area.
+  const double solid = 2.0 * M_PI * (1.0 - zmin) / num_directions;
+  spacing_deg_ = std::sqrt(solid) / kDeg;
+  cached_radius_deg_ = 3.0 * spacing_deg_;
+  cached_.resize(directions_.size());
+  const double cos_r = std::cos(cached_radius_deg_ * kDeg);
+  tbb::parallel_for(0, size(), [&](int i) {
+    for (int j = 0; j < size(); ++j) {
+      if (directions_[i].dot(directions_[j]) >= cos_r) cached_[i].push_back(j);
+    }
+  });
+}
+
+std::vector<int> SkyGrid::Within(int i, double radius_deg) const {
+  std::vector<int> out;
+  const double cos_r = std::cos(std::min(radius_deg, 180.0) * kDeg);
+  if (radius_deg <= cached_radius_deg_) {
+    for (int j : cached_[i]) {
+      if (directions_[i].dot(directions_[j]) >= cos_r) out.push_back(j);
+    }
+    return out;
+  }
+  for (int j = 0; j < size(); ++j) {
+    if (directions_[i].dot(directions_[j]) >= cos_r) out.push_back(j);
+  }
+  return out;
+}
+
+int SkyGrid::Nearest(const Eigen::Vector3d& d) const {
+  const Eigen::Vector3d u = d.normalized();
+  int best = 0;
+  double best_dot = -2.0;
+  for (int j = 0; j < size(); ++j) {
+    const double c = directions_[j].dot(u);
+    if (c > best_dot) best_dot = c, best = j;
+  }
+  return best;
+}
+
+// ---------------------------------------------------------- options check
+
+void SkyEvidenceOptions::Check() const {
+  Require(num_directions >= 16 && num_directions <= 20000, "num_directions must be in [16, 20000]");
+  Require(max_zenith_deg > 10 && max_zenith_deg <= 90, "max_zenith_deg must be in (10, 90]");
+  Require(max_samples >= 50, "max_samples must be >= 50");
+  Require(ignore_top_rows >= 0 && ignore_bottom_rows >= 0,
+          "ignore_top_rows/ignore_bottom_rows must be >= 0");
+  Require(normal_bin_deg > 0 && normal_bin_deg < 90, "normal_bin_deg must be in (0, 90)");
+  Require(min_side_samples >= 1, "min_side_samples must be >= 1");
+  Require(max_ratio > 1, "max_ratio must be > 1");
+  Require(reference_quantile > 0 && reference_quantile < 1, "reference_quantile must be in (0, 1)");
+  Require(rival_exclusion_deg >= 0, "rival_exclusion_deg must be >= 0");
+  Require(samples_per_observation >= 1, "samples_per_observation must be >= 1");
+}
+
+// ------------------------------------------------------------ SkyEvidence
+
+struct SkyEvidence::Impl {
+  const Scene& scene;
+  const Camera& camera;
+  SkyEvidenceOptions o;
+  SkyGrid grid;
+  // Samples: pixel, group; lit[d * S + s] = 1 when direction d reaches it.
+  std::vector<Eigen::Vector2f> pixels;
+  std::vector<int> group;
+  int num_groups = 0;
+  std::vector<uint8_t> lit;
+  std::vector<float> reference;  // empty until SetReference
+  std::vector<uint8_t> scores;   // frames x directions, cost x 10, clipped
+  std::vector<float> best;       // per frame, the best explained share
+  int frames = 0;
+  double build_seconds = 0.0;
+
+  Impl(const Scene& s, const Camera& c, const SkyEvidenceOptions& opt)
+      : scene(s), camera(c), o(opt), grid(opt.num_directions, opt.max_zenith_deg) {}
+
+  int S() const { return static_cast<int>(pixels.size()); }
+
+  void Build() {
+    const auto t0 = std::chrono::steady_clock::now();
+    const int W = camera.width(), H = camera.height();
+    const int y0 = o.ignore_top_rows, y1 = H - o.ignore_bottom_rows;
+    Require(y1 > y0, "ignore_top_rows + ignore_bottom_rows leave no rows");
+    // A first pass on a fine grid finds how much of the image the model
+    // covers; the stride then gives about max_samples samples on it.
+    auto cast = [&](int stride, std::vector<double>* px, Hits* hits) {
+      px->clear();
+      for (int y = y0 + stride / 2; y < y1; y += stride) {
+        for (int x = stride / 2; x < W; x += stride) px->insert(px->end(), {double(x), double(y)});
+      }
+      *hits = Hits(static_cast<int64_t>(px->size() / 2));
+      scene.IntersectPixels(camera, hits->object_id.size(), px->data(), hits->buffers());
+    };
+    std::vector<double> px;
+    Hits hits;
+    const int probe = std::max(1, std::min(W, y1 - y0) / 64);
+    cast(probe, &px, &hits);
+    int64_t covered = 0;
+    for (size_t i = 0; i < hits.object_id.size(); ++i) covered += hits.hit(i);
+    Require(covered > 0, "the camera sees no model surface: check the camera and the model");
+    const double area = double(covered) * probe * probe;
+    const int stride = std::max(1, static_cast<int>(std::floor(std::sqrt(area / o.max_samples))));
+    cast(stride, &px, &hits);
+
+    const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
+    std::vector<Eigen::Vector3f> origin, normal;
+    std::map<std::tuple<int, int, int, int>, int> groups;
+    const double bin = o.normal_bin_deg * kDeg;
+    for (size_t i = 0; i < hits.object_id.size(); ++i) {
+      if (!hits.hit(i)) continue;
+      const Eigen::Vector3f n = hits.normal(i);
+      const Eigen::Vector3f p = hits.point(i);
+      if (!n.allFinite() || !p.allFinite()) continue;
+      // Group key: object and the normal's direction binned in zenith/azimuth.
+      const double nz = std::acos(std::clamp(double(n.z()), -1.0, 1.0));
+      const int zbin = static_cast<int>(std::floor(nz / bin));
+      const int abin = zbin == 0 ? 0
+                                 : static_cast<int>(std::floor(
+                                       (std::atan2(double(n.x()), double(n.y())) + M_PI) / bin));
+      const auto key = std::make_tuple(int(hits.object_id[i]), zbin, abin, 0);
+      auto it = groups.find(key);
+      if (it == groups.end()) it = groups.emplace(key, static_cast<int>(groups.size())).first;
+      pixels.emplace_back(float(px[2 * i]), float(px[2 * i + 1]));
+      group.push_back(it->second);
+      origin.push_back(p + lift * n);
+      normal.push_back(n);
+    }
+    num_groups = static_cast<int>(groups.size());
+    const int s_count = S();
+    Require(s_count > 0, "the camera sees no model surface: check the camera and the model");
+    std::vector<float> flat(3 * s_count);
+    for (int s = 0; s < s_count; ++s) {
+      for (int k = 0; k < 3; ++k) flat[3 * s + k] = origin[s][k];
+    }
+    lit.assign(static_cast<size_t>(grid.size()) * s_count, 0);
+    const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
+    tbb::parallel_for(0, grid.size(), [&](int d) {
+      const Eigen::Vector3f dir = grid.direction(d).cast<float>();
+      std::vector<uint8_t> occluded(s_count);
+      scene.OccludedToward(s_count, flat.data(), dir, 0.f, far, occluded.data());
+      uint8_t* row = &lit[static_cast<size_t>(d) * s_count];
+      for (int s = 0; s < s_count; ++s) row[s] = !occluded[s] && normal[s].dot(dir) > 0.02f;
+    });
+    build_seconds = Seconds(t0);
+  }
+
+  // Bilinear intensity at each sample (the frame's own pixels).
+  void Sample(const cv::Mat& f, std::vector<float>* out) const {
+    out->resize(S());
+    for (int s = 0; s < S(); ++s) {
+      const int x = std::clamp(static_cast<int>(std::lround(pixels[s].x())), 0, f.cols - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(pixels[s].y())), 0, f.rows - 1);
+      (*out)[s] = f.at<float>(y, x);
+    }
+  }
+};
+
+SkyEvidence::SkyEvidence(const Scene& scene, const Camera& camera,
+                         const SkyEvidenceOptions& options)
+    : impl_(std::make_unique<Impl>(scene, camera, (options.Check(), options))) {
+  impl_->Build();
+}
+
+SkyEvidence::~SkyEvidence() = default;
+
+const SkyGrid& SkyEvidence::grid() const { return impl_->grid; }
+int SkyEvidence::num_samples() const { return impl_->S(); }
+std::vector<Eigen::Vector2f> SkyEvidence::sample_pixels() const { return impl_->pixels; }
+double SkyEvidence::build_seconds() const { return impl_->build_seconds; }
+bool SkyEvidence::has_reference() const { return !impl_->reference.empty(); }
+int SkyEvidence::num_frames() const { return impl_->frames; }
+const std::vector<uint8_t>& SkyEvidence::scores() const { return impl_->scores; }
+
+std::vector<uint8_t> SkyEvidence::LitFrom(int direction) const {
+  Require(direction >= 0 && direction < impl_->grid.size(), "direction out of range");
+  const auto begin = impl_->lit.begin() + static_cast<size_t>(direction) * impl_->S();
+  return std::vector<uint8_t>(begin, begin + impl_->S());
+}
+
+std::vector<float> SkyEvidence::Cost(int k) const {
+  Require(k >= 0 && k < impl_->frames, "frame index out of range");
+  const int D = impl_->grid.size();
+  std::vector<float> out(D);
+  for (int d = 0; d < D; ++d) out[d] = impl_->scores[static_cast<size_t>(k) * D + d] / 10.f;
+  return out;
+}
+
+double SkyEvidence::BestExplained(int k) const {
+  Require(k >= 0 && k < impl_->frames, "frame index out of range");
+  return impl_->best[k];
+}
+
+namespace {
+
+void CheckFrame(const cv::Mat& f, const Camera& camera) {
+  Require(f.type() == CV_32FC1 && f.cols == camera.width() && f.rows == camera.height(),
+          "frame: expected float32 gray of the camera's size (" + std::to_string(camera.width()) +
+              "x" + std::to_string(camera.height()) + ")");
+}
+
+}  // namespace
+
+int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
+  Impl& m = *impl_;
+  const int S = m.S();
+  std::vector<std::vector<float>> per_sample(S);
+  int used = 0;
+  std::vector<float> v;
+  for (const cv::Mat& f : frames) {
+    if (f.empty()) continue;
+    CheckFrame(f, m.camera);
+    m.Sample(f, &v);
+    // A frame's exposure is taken out before the quantile: the reference is
+    // a level relative to the frame's median.
+    std::vector<float> sorted = v;
+    std::nth_element(sorted.begin(), sorted.begin() + S / 2, sorted.end());
+    const float med = sorted[S / 2];
+    if (!(med > 1e-4f)) continue;  // black frame
+    for (int s = 0; s < S; ++s) per_sample[s].push_back(v[s] / med);
+    ++used;
+  }
+  if (used == 0) return 0;
+  m.reference.assign(S, 0.f);
+  for (int s = 0; s < S; ++s) {
+    auto& x = per_sample[s];
+    const size_t k = std::min(x.size() - 1, static_cast<size_t>(m.o.reference_quantile * x.size()));
+    std::nth_element(x.begin(), x.begin() + k, x.end());
+    m.reference[s] = std::max(1e-4f, x[k]);
+  }
+  return used;
+}
+
+FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame, std::vector<float>* explained_out) {
+  Impl& m = *impl_;
+  const auto t0 = std::chrono::steady_clock::now();
+  const int S = m.S(), D = m.grid.size(), G = m.num_groups;
+  FrameEvidence out;
+  std::vector<float> explained(D, 0.f);
+  std::vector<float> cost(D, 0.f);  // stays 0 (no preference) without evidence
+  auto keep = [&]() {
+    m.scores.resize(m.scores.size() + D);
+    uint8_t* row = &m.scores[static_cast<size_t>(m.frames) * D];
+    for (int d = 0; d < D; ++d) {
+      row[d] = static_cast<uint8_t>(std::lround(std::clamp(cost[d], 0.f, 25.5f) * 10.f));
+    }
+    m.best.push_back(out.best_explained);
+    ++m.frames;
+    if (explained_out) *explained_out = explained;
+    out.seconds = Seconds(t0);
+    return out;
+  };
+  if (frame.empty()) {
+    out.status = FrameEvidence::Status::kNoFrame;
+    out.message = "frame not decodable";
+    return keep();
+  }
+  CheckFrame(frame, m.camera);
+  Require(!m.reference.empty(), "AddFrame() before SetReference()");
+  std::vector<float> v;
+  m.Sample(frame, &v);
+  std::vector<float> sorted = v;
+  std::nth_element(sorted.begin(), sorted.begin() + S / 2, sorted.end());
+  const float med = sorted[S / 2];
+  int saturated = 0;
+  for (float x : v) saturated += x >= 0.98f;
+  if (!(med > 2e-3f) || saturated > 0.9 * S) {
+    out.status = FrameEvidence::Status::kUnusable;
+    out.message = med > 2e-3f ? "overexposed" : "black (nothing visible)";
+    return keep();
+  }
+  // Ratio to the sample's reference level, exposure taken out.
+  std::vector<double> r(S);
+  for (int s = 0; s < S; ++s) {
+    r[s] = std::clamp(double(v[s]) / med / m.reference[s], 0.0, m.o.max_ratio);
+  }
+  out.exposure = med;
+  // Per group: totals, for the variance every direction tries to explain.
+  std::vector<double> n_g(G, 0), sum_g(G, 0), sq_g(G, 0);
+  for (int s = 0; s < S; ++s) {
+    const int g = m.group[s];
+    n_g[g] += 1, sum_g[g] += r[s], sq_g[g] += r[s] * r[s];
+  }
+  double total = 0;
+  std::vector<double> sst(G);
+  for (int g = 0; g < G; ++g) {
+    sst[g] = n_g[g] > 0 ? std::max(0.0, sq_g[g] - sum_g[g] * sum_g[g] / n_g[g]) : 0.0;
+    total += sst[g];
+  }
+  if (!(total > 1e-9)) {
+    out.status = FrameEvidence::Status::kUnusable;
+    out.message = "uniform where the model is seen";
+    return keep();
+  }
+  const int min_side = m.o.min_side_samples;
+  tbb::parallel_for(0, D, [&](int d) {
+    const uint8_t* row = &m.lit[static_cast<size_t>(d) * S];
+    double n1[64], s1[64];
+    std::vector<double> n1v, s1v;
+    double* pn = n1;
+    double* ps = s1;
+    if (G > 64) {
+      n1v.assign(G, 0), s1v.assign(G, 0);
+      pn = n1v.data(), ps = s1v.data();
+    } else {
+      std::fill(n1, n1 + G, 0.0), std::fill(s1, s1 + G, 0.0);
+    }
+    for (int s = 0; s < S; ++s) {
+      if (row[s]) {
+        const int g = m.group[s];
+        pn[g] += 1, ps[g] += r[s];
+      }
+    }
+    // Explained variance of a two-level (lit/shaded) split per group, only
+    // where the predicted shade is darker than the predicted light.
+    double gain = 0;
+    for (int g = 0; g < G; ++g) {
+      const double a = pn[g], b = n_g[g] - pn[g];
+      if (a < min_side || b < min_side) continue;
+      const double mean_lit = ps[g] / a, mean_shade = (sum_g[g] - ps[g]) / b;
+      if (mean_shade >= mean_lit) continue;
+      const double between = a * b / n_g[g] * (mean_lit - mean_shade) * (mean_lit - mean_shade);
+      gain += between;
+    }
+    explained[d] = static_cast<float>(gain / total);
+  });
+  const int best = static_cast<int>(std::max_element(explained.begin(), explained.end()) -
+                                    explained.begin());
+  out.best_direction = best;
+  out.best_explained = explained[best];
+  // Costs in units of log-likelihood: the variance a direction leaves
+  // unexplained beyond the best one, over the per-sample noise left by the
+  // best one, divided by the samples per independent observation
+  // (neighbouring samples share texture, blur and the model's misfit).
+  const double noise = std::max(1e-9, total * (1.0 - explained[best])) /
+                       std::max(1.0, S - 2.0 * G);
+  const double scale = total / noise / (2.0 * m.o.samples_per_observation);
+  for (int d = 0; d < D; ++d) cost[d] = static_cast<float>((explained[best] - explained[d]) * scale);
+  const double cos_x = std::cos(m.o.rival_exclusion_deg * kDeg);
+  float rival = 0.f;
+  for (int d = 0; d < D; ++d) {
+    if (m.grid.direction(d).dot(m.grid.direction(best)) < cos_x) rival = std::max(rival, explained[d]);
+  }
+  out.margin = (explained[best] - rival) * scale;
+  out.status = out.best_explained > 0.02 ? FrameEvidence::Status::kOk
+                                         : FrameEvidence::Status::kNoShadows;
+  if (out.status == FrameEvidence::Status::kNoShadows) {
+    out.message = "no direction's shadows match the frame (overcast?)";
+    std::fill(cost.begin(), cost.end(), 0.f);
+  }
+  return keep();
+}
+
+}  // namespace sunlapse

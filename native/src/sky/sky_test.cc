@@ -1,0 +1,185 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "sunlapse/sky/sky_evidence.h"
+#include "sunlapse/sky/sun_path.h"
+#include "synthetic.h"
+
+namespace sunlapse {
+namespace {
+
+using testing::AngleDeg;
+
+Eigen::Vector3d Sun(double zenith, double azimuth) {
+  const double z = zenith * M_PI / 180, a = azimuth * M_PI / 180;
+  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
+}
+
+// The Sun's path over a clip: zenith 55 -> 35 deg, azimuth 110 -> 160.
+Eigen::Vector3d PathAt(int f, int n) {
+  const double t = static_cast<double>(f) / (n - 1);
+  return Sun(55 - 20 * t, 110 + 50 * t);
+}
+
+testing::RenderOptions Textured(uint32_t seed) {
+  testing::RenderOptions o;
+  o.noise = 0.01;
+  o.seed = seed;
+  o.ambient = 0.15;
+  o.albedo = [](int id, const Eigen::Vector3f& p) {
+    if (id != 0) return 0.5;
+    const int tiles = (static_cast<int>(std::floor(p.x() * 2)) + static_cast<int>(std::floor(p.y() * 2))) & 1;
+    return 0.3 + 0.08 * tiles + 0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
+  };
+  return o;
+}
+
+// The ground 30% brighter far from the camera than near it (view-dependent
+// reflection, vignetting): no shadow, and it must not be taken for one.
+cv::Mat WithGradient(cv::Mat f) {
+  for (int y = 0; y < f.rows; ++y) {
+    const float gain = 1.3f - 0.3f * y / f.rows;
+    for (int x = 0; x < f.cols; ++x) f.at<float>(y, x) *= gain;
+  }
+  return f;
+}
+
+struct Clip {
+  Scene scene = testing::BenchScene().Build();
+  Camera cam = testing::LookAt({4, -12, 9}, {0, 0, 0}, 320, 240);
+  std::vector<cv::Mat> frames;
+  std::vector<Eigen::Vector3d> truth;
+  explicit Clip(int n, bool gradient = true) {
+    for (int f = 0; f < n; ++f) {
+      truth.push_back(PathAt(f, n));
+      cv::Mat img = testing::RenderLambertian(scene, cam, truth.back(), Textured(f + 1));
+      frames.push_back(gradient ? WithGradient(img) : img);
+    }
+  }
+};
+
+std::vector<cv::Mat> Spread(const std::vector<cv::Mat>& frames, int k) {
+  std::vector<cv::Mat> out;
+  for (int i = 0; i < k; ++i) out.push_back(frames[i * (frames.size() - 1) / std::max(1, k - 1)]);
+  return out;
+}
+
+TEST(SkyEvidence, BestDirectionOfEachFrameIsNearTheTrueSunDespiteAGradient) {
+  Clip clip(12);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ASSERT_GT(ev.num_samples(), 1000);
+  ASSERT_EQ(ev.SetReference(Spread(clip.frames, 6)), 6);
+  const double tolerance = 1.5 * ev.grid().spacing_deg();
+  for (size_t f = 0; f < clip.frames.size(); ++f) {
+    const FrameEvidence e = ev.AddFrame(clip.frames[f]);
+    ASSERT_EQ(e.status, FrameEvidence::Status::kOk) << e.message;
+    const double error = AngleDeg(ev.grid().direction(e.best_direction), clip.truth[f]);
+    EXPECT_LT(error, tolerance) << "frame " << f;
+    EXPECT_GT(e.best_explained, 0.1) << "frame " << f;
+    EXPECT_GT(e.margin, 2.0) << "frame " << f;
+  }
+  std::printf("table: %d samples x %d directions in %.2f s\n", ev.num_samples(), ev.grid().size(),
+              ev.build_seconds());
+}
+
+TEST(SkyEvidence, ShadowlessFrameWithAGradientExplainsNothing) {
+  Clip clip(6);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(clip.frames);
+  // An overcast frame: ambient light only, the same gradient.
+  testing::RenderOptions o = Textured(99);
+  o.sun = 0.0;
+  o.ambient = 0.6;
+  const cv::Mat overcast = WithGradient(testing::RenderLambertian(clip.scene, clip.cam, Sun(30, 100), o));
+  const FrameEvidence e = ev.AddFrame(overcast);
+  EXPECT_LT(e.best_explained, 0.1);
+  // A frame of noise: nothing to explain either.
+  cv::Mat noise(clip.cam.height(), clip.cam.width(), CV_32F);
+  cv::randu(noise, 0.f, 1.f);
+  EXPECT_LT(ev.AddFrame(noise).best_explained, 0.1);
+}
+
+TEST(SkyEvidence, BlackAndMissingFramesAreReportedNotScored) {
+  Clip clip(4);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(clip.frames);
+  EXPECT_EQ(ev.AddFrame(cv::Mat()).status, FrameEvidence::Status::kNoFrame);
+  const cv::Mat black = cv::Mat::zeros(clip.cam.height(), clip.cam.width(), CV_32F);
+  EXPECT_EQ(ev.AddFrame(black).status, FrameEvidence::Status::kUnusable);
+  EXPECT_EQ(ev.num_frames(), 2);
+  EXPECT_THROW(ev.AddFrame(cv::Mat::zeros(10, 10, CV_32F)), std::invalid_argument);
+}
+
+double PathError(const SkyEvidence& ev, const SunPathResult& path, const std::vector<Eigen::Vector3d>& truth,
+                 size_t t) {
+  return AngleDeg(ev.grid().direction(path.direction[t]), truth[t]);
+}
+
+TEST(SunPath, BrokenFramesAreCarriedByTheirNeighbours) {
+  const int n = 30;
+  Clip clip(n);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(Spread(clip.frames, 8));
+  cv::Mat noise(clip.cam.height(), clip.cam.width(), CV_32F);
+  cv::randu(noise, 0.f, 1.f);
+  std::vector<int> broken = {0, 1, 13, 14, 15, 22};
+  for (int f = 0; f < n; ++f) {
+    const bool bad = std::find(broken.begin(), broken.end(), f) != broken.end();
+    ev.AddFrame(bad ? (f % 2 ? noise : cv::Mat()) : clip.frames[f]);
+  }
+  const SunPathResult path = SolveSunPath(ev, {}, {}, SunPathOptions());
+  ASSERT_EQ(path.status, SunPathResult::Status::kSuccess) << path.message;
+  const double tolerance = 1.5 * ev.grid().spacing_deg();
+  for (int f = 0; f < n; ++f) {
+    const bool bad = std::find(broken.begin(), broken.end(), f) != broken.end();
+    EXPECT_LT(PathError(ev, path, clip.truth, f), bad ? 2 * tolerance : tolerance) << "frame " << f;
+    EXPECT_EQ(bool(path.measured[f]), !bad) << "frame " << f;
+    EXPECT_FALSE(path.jump_before[f]) << "frame " << f;
+  }
+}
+
+TEST(SunPath, ALoopedClipJumpsOnceAndStaysRightOnBothSides) {
+  const int n = 20;
+  Clip clip(n);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(Spread(clip.frames, 8));
+  std::vector<Eigen::Vector3d> truth;
+  for (int loop = 0; loop < 2; ++loop) {
+    for (int f = 0; f < n; ++f) ev.AddFrame(clip.frames[f]), truth.push_back(clip.truth[f]);
+  }
+  const SunPathResult path = SolveSunPath(ev, {}, {}, SunPathOptions());
+  ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
+  const double tolerance = 1.5 * ev.grid().spacing_deg();
+  int jumps = 0;
+  for (int t = 0; t < 2 * n; ++t) {
+    EXPECT_LT(PathError(ev, path, truth, t), tolerance) << "frame " << t;
+    jumps += path.jump_before[t];
+  }
+  EXPECT_EQ(jumps, 1);
+  EXPECT_TRUE(path.jump_before[n]);
+}
+
+TEST(SunPath, KnownTimesBoundTheStepAndSegmentsRestart) {
+  const int n = 16;
+  Clip clip(n);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(Spread(clip.frames, 8));
+  for (const cv::Mat& f : clip.frames) ev.AddFrame(f);
+  std::vector<double> times;
+  for (int f = 0; f < n; ++f) times.push_back(600.0 * f);  // 10 min apart
+  std::vector<uint8_t> start(n, 0);
+  start[8] = 1;
+  const SunPathResult path = SolveSunPath(ev, times, start, SunPathOptions());
+  ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
+  EXPECT_TRUE(path.jump_before[8]);
+  for (int t = 0; t < n; ++t) {
+    EXPECT_LT(PathError(ev, path, clip.truth, t), 1.5 * ev.grid().spacing_deg()) << "frame " << t;
+  }
+  EXPECT_THROW(SolveSunPath(ev, {1.0}, {}, SunPathOptions()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sunlapse
