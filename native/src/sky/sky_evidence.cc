@@ -19,7 +19,8 @@ void Require(bool ok, const std::string& message) {
 }
 
 double Seconds(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+      .count();
 }
 
 }  // namespace
@@ -28,13 +29,15 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 
 SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
   Require(num_directions >= 16, "num_directions must be >= 16");
-  Require(max_zenith_deg > 0 && max_zenith_deg <= 90, "max_zenith_deg must be in (0, 90]");
+  Require(max_zenith_deg > 0 && max_zenith_deg <= 90,
+          "max_zenith_deg must be in (0, 90]");
   const double zmin = std::cos(max_zenith_deg * kDeg);
   const double golden = M_PI * (3.0 - std::sqrt(5.0));
   for (int k = 0; k < num_directions; ++k) {
     const double z = 1.0 - (k + 0.5) / num_directions * (1.0 - zmin);
     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    directions_.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
+    directions_.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k),
+                             z);
   }
   // Solid angle per direction -> the side of a square of that area.
   const double solid = 2.0 * M_PI * (1.0 - zmin) / num_directions;
@@ -78,15 +81,19 @@ int SkyGrid::Nearest(const Eigen::Vector3d& d) const {
 // ---------------------------------------------------------- options check
 
 void SkyEvidenceOptions::Check() const {
-  Require(num_directions >= 16 && num_directions <= 20000, "num_directions must be in [16, 20000]");
-  Require(max_zenith_deg > 10 && max_zenith_deg <= 90, "max_zenith_deg must be in (10, 90]");
+  Require(num_directions >= 16 && num_directions <= 20000,
+          "num_directions must be in [16, 20000]");
+  Require(max_zenith_deg > 10 && max_zenith_deg <= 90,
+          "max_zenith_deg must be in (10, 90]");
   Require(max_samples >= 50, "max_samples must be >= 50");
   Require(ignore_top_rows >= 0 && ignore_bottom_rows >= 0,
           "ignore_top_rows/ignore_bottom_rows must be >= 0");
-  Require(normal_bin_deg > 0 && normal_bin_deg < 90, "normal_bin_deg must be in (0, 90)");
+  Require(normal_bin_deg > 0 && normal_bin_deg < 90,
+          "normal_bin_deg must be in (0, 90)");
   Require(min_side_samples >= 1, "min_side_samples must be >= 1");
   Require(max_ratio > 1, "max_ratio must be > 1");
-  Require(reference_quantile > 0 && reference_quantile < 1, "reference_quantile must be in (0, 1)");
+  Require(reference_quantile > 0 && reference_quantile < 1,
+          "reference_quantile must be in (0, 1)");
   Require(rival_exclusion_deg >= 0, "rival_exclusion_deg must be >= 0");
   Require(samples_per_observation >= 1, "samples_per_observation must be >= 1");
 }
@@ -110,7 +117,10 @@ struct SkyEvidence::Impl {
   double build_seconds = 0.0;
 
   Impl(const Scene& s, const Camera& c, const SkyEvidenceOptions& opt)
-      : scene(s), camera(c), o(opt), grid(opt.num_directions, opt.max_zenith_deg) {}
+      : scene(s),
+        camera(c),
+        o(opt),
+        grid(opt.num_directions, opt.max_zenith_deg) {}
 
   int S() const { return static_cast<int>(pixels.size()); }
 
@@ -124,10 +134,12 @@ struct SkyEvidence::Impl {
     auto cast = [&](int stride, std::vector<double>* px, Hits* hits) {
       px->clear();
       for (int y = y0 + stride / 2; y < y1; y += stride) {
-        for (int x = stride / 2; x < W; x += stride) px->insert(px->end(), {double(x), double(y)});
+        for (int x = stride / 2; x < W; x += stride)
+          px->insert(px->end(), {double(x), double(y)});
       }
       *hits = Hits(static_cast<int64_t>(px->size() / 2));
-      scene.IntersectPixels(camera, hits->object_id.size(), px->data(), hits->buffers());
+      scene.IntersectPixels(camera, hits->object_id.size(), px->data(),
+                            hits->buffers());
     };
     std::vector<double> px;
     Hits hits;
@@ -135,9 +147,11 @@ struct SkyEvidence::Impl {
     cast(probe, &px, &hits);
     int64_t covered = 0;
     for (size_t i = 0; i < hits.object_id.size(); ++i) covered += hits.hit(i);
-    Require(covered > 0, "the camera sees no model surface: check the camera and the model");
+    Require(covered > 0,
+            "the camera sees no model surface: check the camera and the model");
     const double area = double(covered) * probe * probe;
-    const int stride = std::max(1, static_cast<int>(std::floor(std::sqrt(area / o.max_samples))));
+    const int stride = std::max(
+        1, static_cast<int>(std::floor(std::sqrt(area / o.max_samples))));
     cast(stride, &px, &hits);
 
     const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
@@ -152,12 +166,15 @@ struct SkyEvidence::Impl {
       // Group key: object and the normal's direction binned in zenith/azimuth.
       const double nz = std::acos(std::clamp(double(n.z()), -1.0, 1.0));
       const int zbin = static_cast<int>(std::floor(nz / bin));
-      const int abin = zbin == 0 ? 0
-                                 : static_cast<int>(std::floor(
-                                       (std::atan2(double(n.x()), double(n.y())) + M_PI) / bin));
+      const int abin =
+          zbin == 0
+              ? 0
+              : static_cast<int>(std::floor(
+                    (std::atan2(double(n.x()), double(n.y())) + M_PI) / bin));
       const auto key = std::make_tuple(int(hits.object_id[i]), zbin, abin, 0);
       auto it = groups.find(key);
-      if (it == groups.end()) it = groups.emplace(key, static_cast<int>(groups.size())).first;
+      if (it == groups.end())
+        it = groups.emplace(key, static_cast<int>(groups.size())).first;
       pixels.emplace_back(float(px[2 * i]), float(px[2 * i + 1]));
       group.push_back(it->second);
       origin.push_back(p + lift * n);
@@ -165,7 +182,8 @@ struct SkyEvidence::Impl {
     }
     num_groups = static_cast<int>(groups.size());
     const int s_count = S();
-    Require(s_count > 0, "the camera sees no model surface: check the camera and the model");
+    Require(s_count > 0,
+            "the camera sees no model surface: check the camera and the model");
     std::vector<float> flat(3 * s_count);
     for (int s = 0; s < s_count; ++s) {
       for (int k = 0; k < 3; ++k) flat[3 * s + k] = origin[s][k];
@@ -175,9 +193,11 @@ struct SkyEvidence::Impl {
     tbb::parallel_for(0, grid.size(), [&](int d) {
       const Eigen::Vector3f dir = grid.direction(d).cast<float>();
       std::vector<uint8_t> occluded(s_count);
-      scene.OccludedToward(s_count, flat.data(), dir, 0.f, far, occluded.data());
+      scene.OccludedToward(s_count, flat.data(), dir, 0.f, far,
+                           occluded.data());
       uint8_t* row = &lit[static_cast<size_t>(d) * s_count];
-      for (int s = 0; s < s_count; ++s) row[s] = !occluded[s] && normal[s].dot(dir) > 0.02f;
+      for (int s = 0; s < s_count; ++s)
+        row[s] = !occluded[s] && normal[s].dot(dir) > 0.02f;
     });
     build_seconds = Seconds(t0);
   }
@@ -186,8 +206,10 @@ struct SkyEvidence::Impl {
   void Sample(const cv::Mat& f, std::vector<float>* out) const {
     out->resize(S());
     for (int s = 0; s < S(); ++s) {
-      const int x = std::clamp(static_cast<int>(std::lround(pixels[s].x())), 0, f.cols - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(pixels[s].y())), 0, f.rows - 1);
+      const int x = std::clamp(static_cast<int>(std::lround(pixels[s].x())), 0,
+                               f.cols - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(pixels[s].y())), 0,
+                               f.rows - 1);
       (*out)[s] = f.at<float>(y, x);
     }
   }
@@ -203,15 +225,21 @@ SkyEvidence::~SkyEvidence() = default;
 
 const SkyGrid& SkyEvidence::grid() const { return impl_->grid; }
 int SkyEvidence::num_samples() const { return impl_->S(); }
-std::vector<Eigen::Vector2f> SkyEvidence::sample_pixels() const { return impl_->pixels; }
+std::vector<Eigen::Vector2f> SkyEvidence::sample_pixels() const {
+  return impl_->pixels;
+}
 double SkyEvidence::build_seconds() const { return impl_->build_seconds; }
 bool SkyEvidence::has_reference() const { return !impl_->reference.empty(); }
 int SkyEvidence::num_frames() const { return impl_->frames; }
-const std::vector<uint8_t>& SkyEvidence::scores() const { return impl_->scores; }
+const std::vector<uint8_t>& SkyEvidence::scores() const {
+  return impl_->scores;
+}
 
 std::vector<uint8_t> SkyEvidence::LitFrom(int direction) const {
-  Require(direction >= 0 && direction < impl_->grid.size(), "direction out of range");
-  const auto begin = impl_->lit.begin() + static_cast<size_t>(direction) * impl_->S();
+  Require(direction >= 0 && direction < impl_->grid.size(),
+          "direction out of range");
+  const auto begin =
+      impl_->lit.begin() + static_cast<size_t>(direction) * impl_->S();
   return std::vector<uint8_t>(begin, begin + impl_->S());
 }
 
@@ -219,7 +247,8 @@ std::vector<float> SkyEvidence::Cost(int k) const {
   Require(k >= 0 && k < impl_->frames, "frame index out of range");
   const int D = impl_->grid.size();
   std::vector<float> out(D);
-  for (int d = 0; d < D; ++d) out[d] = impl_->scores[static_cast<size_t>(k) * D + d] / 10.f;
+  for (int d = 0; d < D; ++d)
+    out[d] = impl_->scores[static_cast<size_t>(k) * D + d] / 10.f;
   return out;
 }
 
@@ -231,9 +260,11 @@ double SkyEvidence::BestExplained(int k) const {
 namespace {
 
 void CheckFrame(const cv::Mat& f, const Camera& camera) {
-  Require(f.type() == CV_32FC1 && f.cols == camera.width() && f.rows == camera.height(),
-          "frame: expected float32 gray of the camera's size (" + std::to_string(camera.width()) +
-              "x" + std::to_string(camera.height()) + ")");
+  Require(f.type() == CV_32FC1 && f.cols == camera.width() &&
+              f.rows == camera.height(),
+          "frame: expected float32 gray of the camera's size (" +
+              std::to_string(camera.width()) + "x" +
+              std::to_string(camera.height()) + ")");
 }
 
 }  // namespace
@@ -261,14 +292,16 @@ int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
   m.reference.assign(S, 0.f);
   for (int s = 0; s < S; ++s) {
     auto& x = per_sample[s];
-    const size_t k = std::min(x.size() - 1, static_cast<size_t>(m.o.reference_quantile * x.size()));
+    const size_t k = std::min(
+        x.size() - 1, static_cast<size_t>(m.o.reference_quantile * x.size()));
     std::nth_element(x.begin(), x.begin() + k, x.end());
     m.reference[s] = std::max(1e-4f, x[k]);
   }
   return used;
 }
 
-FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame, std::vector<float>* explained_out) {
+FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
+                                    std::vector<float>* explained_out) {
   Impl& m = *impl_;
   const auto t0 = std::chrono::steady_clock::now();
   const int S = m.S(), D = m.grid.size(), G = m.num_groups;
@@ -279,7 +312,8 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame, std::vector<float>* ex
     m.scores.resize(m.scores.size() + D);
     uint8_t* row = &m.scores[static_cast<size_t>(m.frames) * D];
     for (int d = 0; d < D; ++d) {
-      row[d] = static_cast<uint8_t>(std::lround(std::clamp(cost[d], 0.f, 25.5f) * 10.f));
+      row[d] = static_cast<uint8_t>(
+          std::lround(std::clamp(cost[d], 0.f, 25.5f) * 10.f));
     }
     m.best.push_back(out.best_explained);
     ++m.frames;
@@ -321,7 +355,8 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame, std::vector<float>* ex
   double total = 0;
   std::vector<double> sst(G);
   for (int g = 0; g < G; ++g) {
-    sst[g] = n_g[g] > 0 ? std::max(0.0, sq_g[g] - sum_g[g] * sum_g[g] / n_g[g]) : 0.0;
+    sst[g] = n_g[g] > 0 ? std::max(0.0, sq_g[g] - sum_g[g] * sum_g[g] / n_g[g])
+                        : 0.0;
     total += sst[g];
   }
   if (!(total > 1e-9)) {
@@ -356,13 +391,14 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame, std::vector<float>* ex
       if (a < min_side || b < min_side) continue;
       const double mean_lit = ps[g] / a, mean_shade = (sum_g[g] - ps[g]) / b;
       if (mean_shade >= mean_lit) continue;
-      const double between = a * b / n_g[g] * (mean_lit - mean_shade) * (mean_lit - mean_shade);
+      const double between =
+          a * b / n_g[g] * (mean_lit - mean_shade) * (mean_lit - mean_shade);
       gain += between;
     }
     explained[d] = static_cast<float>(gain / total);
   });
-  const int best = static_cast<int>(std::max_element(explained.begin(), explained.end()) -
-                                    explained.begin());
+  const int best = static_cast<int>(
+      std::max_element(explained.begin(), explained.end()) - explained.begin());
   out.best_direction = best;
   out.best_explained = explained[best];
   // Costs in units of log-likelihood: the variance a direction leaves
@@ -372,11 +408,13 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame, std::vector<float>* ex
   const double noise = std::max(1e-9, total * (1.0 - explained[best])) /
                        std::max(1.0, S - 2.0 * G);
   const double scale = total / noise / (2.0 * m.o.samples_per_observation);
-  for (int d = 0; d < D; ++d) cost[d] = static_cast<float>((explained[best] - explained[d]) * scale);
+  for (int d = 0; d < D; ++d)
+    cost[d] = static_cast<float>((explained[best] - explained[d]) * scale);
   const double cos_x = std::cos(m.o.rival_exclusion_deg * kDeg);
   float rival = 0.f;
   for (int d = 0; d < D; ++d) {
-    if (m.grid.direction(d).dot(m.grid.direction(best)) < cos_x) rival = std::max(rival, explained[d]);
+    if (m.grid.direction(d).dot(m.grid.direction(best)) < cos_x)
+      rival = std::max(rival, explained[d]);
   }
   out.margin = (explained[best] - rival) * scale;
   out.status = out.best_explained > 0.02 ? FrameEvidence::Status::kOk

@@ -18,17 +18,26 @@ void Require(bool ok, const std::string& message) {
 }  // namespace
 
 void SunPathOptions::Check() const {
-  Require(evidence_weight > 0 && std::isfinite(evidence_weight), "evidence_weight must be > 0");
-  Require(step_weight >= 0 && std::isfinite(step_weight), "step_weight must be >= 0");
-  Require(std::isfinite(jump_cost), "jump_cost must be finite (negative: no jumps)");
-  Require(max_step_deg > 0 && max_step_deg <= 90, "max_step_deg must be in (0, 90]");
+  Require(evidence_weight > 0 && std::isfinite(evidence_weight),
+          "evidence_weight must be > 0");
+  Require(step_weight >= 0 && std::isfinite(step_weight),
+          "step_weight must be >= 0");
+  Require(std::isfinite(jump_cost),
+          "jump_cost must be finite (negative: no jumps)");
+  Require(max_step_deg > 0 && max_step_deg <= 90,
+          "max_step_deg must be in (0, 90]");
   Require(max_speed_deg_per_hour > 0 && max_speed_deg_per_hour <= 90,
           "max_speed_deg_per_hour must be in (0, 90]");
-  Require(min_explained >= 0 && min_explained < 1, "min_explained must be in [0, 1)");
-  Require(min_margin >= 0 && min_margin < 1, "min_margin must be in [0, 1)");
+  Require(min_explained >= 0 && min_explained < 1,
+          "min_explained must be in [0, 1)");
+  Require(min_margin >= 0 && std::isfinite(min_margin),
+          "min_margin must be >= 0");
+  Require(rival_exclusion_deg >= 0 && rival_exclusion_deg <= 90,
+          "rival_exclusion_deg must be in [0, 90]");
 }
 
-SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double>& times_s,
+SunPathResult SolveSunPath(const SkyEvidence& evidence,
+                           const std::vector<double>& times_s,
                            const std::vector<uint8_t>& segment_start,
                            const SunPathOptions& o) {
   o.Check();
@@ -52,7 +61,9 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double
   const std::vector<uint8_t>& scores = evidence.scores();
   // Each frame's cost of a direction, relative to the frame's best (0 there;
   // 0 everywhere on a frame without evidence, which is then carried).
-  auto cost_of = [&](int t, int d) { return scores[static_cast<size_t>(t) * D + d] / 10.0; };
+  auto cost_of = [&](int t, int d) {
+    return scores[static_cast<size_t>(t) * D + d] / 10.0;
+  };
   bool any = false;
   for (int t = 0; t < T && !any; ++t) any = evidence.BestExplained(t) > 0.02;
   if (!any) {
@@ -63,18 +74,21 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double
   const double slack = 1.5 * grid.spacing_deg();
   auto radius = [&](int t) {  // allowed motion from frame t-1 to t (deg)
     const double dt = times_s.empty() ? NAN : times_s[t] - times_s[t - 1];
-    if (std::isfinite(dt)) return std::abs(dt) / 3600.0 * o.max_speed_deg_per_hour + slack;
+    if (std::isfinite(dt))
+      return std::abs(dt) / 3600.0 * o.max_speed_deg_per_hour + slack;
     return std::max(o.max_step_deg, slack);
   };
 
   std::vector<double> cost(D), next(D);
-  std::vector<int> back(static_cast<size_t>(T) * D, -1);  // -1: segment start or jump
+  std::vector<int> back(static_cast<size_t>(T) * D,
+                        -1);  // -1: segment start or jump
   std::vector<uint8_t> jumped(static_cast<size_t>(T) * D, 0);
   for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
   for (int t = 1; t < T; ++t) {
     const bool hard = !segment_start.empty() && segment_start[t];
     const double prev_min = *std::min_element(cost.begin(), cost.end());
-    const int prev_arg = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+    const int prev_arg = static_cast<int>(
+        std::min_element(cost.begin(), cost.end()) - cost.begin());
     const double r = radius(t);
     for (int d = 0; d < D; ++d) {
       double c = kInf;
@@ -84,7 +98,10 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double
         c = prev_min;
       } else {
         for (int p : grid.Within(d, r)) {
-          const double ang = std::acos(std::clamp(grid.direction(p).dot(grid.direction(d)), -1.0, 1.0)) / kDeg;
+          const double ang =
+              std::acos(std::clamp(grid.direction(p).dot(grid.direction(d)),
+                                   -1.0, 1.0)) /
+              kDeg;
           const double step = cost[p] + o.step_weight * (ang / r) * (ang / r);
           if (step < c) c = step, arg = p;
         }
@@ -98,7 +115,8 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double
     }
     std::swap(cost, next);
   }
-  int d = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  int d = static_cast<int>(std::min_element(cost.begin(), cost.end()) -
+                           cost.begin());
   out.cost = cost[d];
   for (int t = T - 1; t >= 0; --t) {
     out.direction[t] = d;
@@ -109,18 +127,21 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double
   }
   // Per frame: the frame's own support for the chosen direction: how much
   // more the best direction well away from it costs (log-likelihood).
-  const double exclusion = std::max(o.rival_exclusion_deg, 2.5 * grid.spacing_deg());
+  const double exclusion =
+      std::max(o.rival_exclusion_deg, 2.5 * grid.spacing_deg());
   const double cos_x = std::cos(exclusion * kDeg);
   for (int t = 0; t < T; ++t) {
     const int c = out.direction[t];
     const double own = cost_of(t, c);
     double rival = 1e9;
     for (int k = 0; k < D; ++k) {
-      if (grid.direction(k).dot(grid.direction(c)) < cos_x) rival = std::min(rival, cost_of(t, k));
+      if (grid.direction(k).dot(grid.direction(c)) < cos_x)
+        rival = std::min(rival, cost_of(t, k));
     }
     out.explained[t] = static_cast<float>(evidence.BestExplained(t));
     out.margin[t] = static_cast<float>(rival - own);
-    out.measured[t] = out.explained[t] >= o.min_explained && out.margin[t] >= o.min_margin;
+    out.measured[t] =
+        out.explained[t] >= o.min_explained && out.margin[t] >= o.min_margin;
   }
   out.status = SunPathResult::Status::kSuccess;
   return out;

@@ -95,10 +95,10 @@ struct SkyEvidenceOptions {
 
 struct FrameEvidence {
   enum class Status {
-    kOk,          // the frame was scored
-    kNoFrame,     // no frame (not decodable)
-    kUnusable,    // black, overexposed or uniform where the model is seen
-    kNoShadows,   // scored, but no direction explains anything (overcast?)
+    kOk,         // the frame was scored
+    kNoFrame,    // no frame (not decodable)
+    kUnusable,   // black, overexposed or uniform where the model is seen
+    kNoShadows,  // scored, but no direction explains anything (overcast?)
   };
   Status status = Status::kNoFrame;
   std::string message;
@@ -140,7 +140,8 @@ class SkyEvidence {
   // Scores one frame (empty Mat: not decodable) against every direction and
   // keeps the costs for the path (sun_path.h), in the order given.
   // explained_out, when not null, receives each direction's explained share.
-  FrameEvidence AddFrame(const cv::Mat& frame, std::vector<float>* explained_out = nullptr);
+  FrameEvidence AddFrame(const cv::Mat& frame,
+                         std::vector<float>* explained_out = nullptr);
   int num_frames() const;
   // Cost of each direction on frame k (log-likelihood below the frame's best
   // direction; 0 everywhere on a frame without evidence), as kept: quantised

@@ -24,7 +24,7 @@ struct SunPathOptions {
   // Weight of the evidence's costs (sky_evidence.h: log-likelihood units).
   double evidence_weight = 1.0;
   // Cost of a step of the whole allowed radius (grows with its square).
-  double step_weight = 1.0;
+  double step_weight = 0.1;
   // Cost of a jump beyond the allowed radius (a time jump in the clip).
   // Negative: jumps are not allowed.
   double jump_cost = 20.0;
@@ -67,7 +67,8 @@ struct SunPathResult {
 // frames: the evidence's frames in order; times_s: each frame's capture time
 // in seconds (NaN when unknown); segment_start: 1 where the caller knows the
 // clip jumps (capture times going back, a cut) and no step is taken.
-SunPathResult SolveSunPath(const SkyEvidence& evidence, const std::vector<double>& times_s,
+SunPathResult SolveSunPath(const SkyEvidence& evidence,
+                           const std::vector<double>& times_s,
                            const std::vector<uint8_t>& segment_start,
                            const SunPathOptions& options);
 
