@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
+from .estimate import whole_clip
 from .core import evaluation, frametimes, smoothing, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
@@ -336,6 +337,9 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
                                       "out_of_order_frames": late}
 
     t0 = time.perf_counter()
+    if options.method == "default" and options.initial_sun is None:
+        return _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
+                               progress, t0)
     search = _ShadowSearchLazy(scene, camera, clip_path, clip_frame_start, frames, options)
     # The anchor: the first frame (in capture order) whose Sun is clear. The
     # thesis starts on frame 1 whatever it shows; a dawn frame whose shadow
@@ -487,9 +491,27 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         _note_unmodelled_shadows(track, scene, camera, visit[anchor], anchor_bgr,
                                  init["sun_in_world"], list(samples.values()), options)
 
+    _finish(native, track, raws, options, times, progress, [[r[0] for r in raws]])
+    if reacquired:
+        track.extra["reacquired_frames"] = reacquired
+    n_track = max(1, len(frames) - 1)
+    track.extra["timing"] = {"initial_s": init["seconds"],
+                             "tracking_ms_per_frame": 1000.0 * track_seconds / n_track,
+                             "total_s": time.perf_counter() - t0}
+    _check_progress(progress, 1.0)
+    return track
+
+
+def _finish(native, track, raws, options, times, progress, segments):
+    """Smooths the raw angles (per segment: smoothing never crosses a jump)
+    and fills the track's frames. raws: (frame, zenith, geographic azimuth,
+    confidence, reason, native result) in frame order; times: capture times
+    of the run's frames in frame order, or None."""
     _check_progress(progress, 0.97)
     numbers = [r[0] for r in raws]
+    north = track.north_offset_deg
     zs = azs = None
+    raws = list(raws)
     if options.smoothing == "physical":
         zs, azs, north = _physical(native, track, numbers, raws, options, north)
         if zs is not None:  # azimuths are geographic now, with the fitted north
@@ -501,10 +523,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
             track.north_offset_deg = north
     if zs is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
-        zs, azs = smoothing.smooth_angles(
-            numbers, [r[1] for r in raws], [r[2] for r in raws], [r[3] for r in raws],
-            mode, degree=TWO_PASS_DEGREE[options.method], space=SMOOTHING_SPACE[options.method],
-            times_s=None if times is None else frametimes.seconds_since(times))
+        zs, azs = _smooth_segments(numbers, raws, segments, mode, options, times)
     for k, ((f, z, a, conf, reason, res), zs_f, as_f) in enumerate(zip(raws, zs, azs)):
         est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,
                                       raw_zenith_deg=z, raw_azimuth_deg=a,
@@ -516,11 +535,89 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         if res is not None and z is not None and 0 < res.contrast < 100:
             est.sun_ambient_ratio = res.contrast
         track.frames.append(est)
-    if reacquired:
-        track.extra["reacquired_frames"] = reacquired
-    n_track = max(1, len(frames) - 1)
-    track.extra["timing"] = {"initial_s": init["seconds"],
-                             "tracking_ms_per_frame": 1000.0 * track_seconds / n_track,
-                             "total_s": time.perf_counter() - t0}
-    _check_progress(progress, 1.0)
+
+
+def _smooth_segments(numbers, raws, segments, mode, options, times):
+    """Smooths each segment on its own, only between its first and last
+    frames with angles: nothing is extrapolated past a segment's measured
+    frames, and no fit runs through a time jump."""
+    index = {f: k for k, f in enumerate(numbers)}
+    seconds = None if times is None else frametimes.seconds_since(times)
+    zs, azs = [None] * len(numbers), [None] * len(numbers)
+    for seg in segments:
+        ks = sorted(index[f] for f in seg)
+        have = [k for k in ks if raws[k][1] is not None]
+        if not have:
+            continue
+        ks = [k for k in ks if have[0] <= k <= have[-1]]
+        z_s, a_s = smoothing.smooth_angles(
+            [numbers[k] for k in ks], [raws[k][1] for k in ks], [raws[k][2] for k in ks],
+            [raws[k][3] for k in ks], mode, degree=TWO_PASS_DEGREE[options.method],
+            space=SMOOTHING_SPACE[options.method],
+            times_s=None if seconds is None else [seconds[k] for k in ks])
+        for k, z, a in zip(ks, z_s, a_s):
+            zs[k], azs[k] = z, a
+    return zs, azs
+
+
+def _run_whole_clip(scene, camera, source, frames, visit, times, options, track, progress, t0):
+    """The default method: the Sun over the whole clip at once
+    (estimate/whole_clip.py), then smoothing per segment."""
+    native = native_loader.require()
+    north = options.north_offset_deg
+    sample_at = set(acquire.spread(frames))
+    samples = {}
+
+    def read_gray(f):
+        try:
+            bgr = source.read(f)
+        except StopIteration:
+            return None
+        if bgr is None or bgr.shape[0] != camera.height or bgr.shape[1] != camera.width:
+            return None
+        if f in sample_at:
+            samples[f] = bgr
+        return native.to_linear_gray(bgr, GAMMA[options.method])
+
+    seconds = None
+    if times is not None:
+        by_frame = dict(zip(frames, frametimes.seconds_since(times)))
+        seconds = [by_frame[f] for f in visit]
+    try:
+        result = whole_clip.estimate(
+            scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
+            ignore_top_rows=options.ignore_top_rows,
+            progress=None if progress is None else (lambda x: progress(0.95 * x)))
+    except whole_clip.Cancelled:
+        raise PipelineError("cancelled")
+    track.method["initial"] = track.method["tracking"] = "whole_clip"
+    by_frame = {r.frame: r for r in result.frames}
+    raws = []
+    for f in frames:
+        r = by_frame[f]
+        az = None if r.azimuth_world_deg is None else (r.azimuth_world_deg - north) % 360.0
+        raws.append((f, r.zenith_deg, az, r.confidence, r.reason, r.tracked))
+    if result.anchor is not None:
+        a = by_frame[result.anchor]
+        track.initial = {"frame": a.frame, "zenith_deg": a.zenith_deg,
+                         "azimuth_deg": (a.azimuth_world_deg - north) % 360.0,
+                         "residual": None, "confidence": a.confidence,
+                         "seconds": result.timing.get("table_s", 0.0)
+                         + result.timing.get("reference_s", 0.0),
+                         "message": "the best-supported frame of the whole-clip path"}
+        try:
+            anchor_bgr = source.read(a.frame)
+        except StopIteration:
+            anchor_bgr = None
+        if anchor_bgr is not None:
+            _note_unmodelled_shadows(track, scene, camera, a.frame, anchor_bgr,
+                                     whole_clip.sun_in_world(a.zenith_deg, a.azimuth_world_deg),
+                                     list(samples.values()), options)
+    elif result.message:
+        track.extra["message"] = result.message
+    track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
+    if result.jumps:
+        track.extra["jumps"] = result.jumps
+    _finish(native, track, raws, options, times, progress, result.segments)
+    track.extra["timing"] = dict(result.timing, total_s=time.perf_counter() - t0)
     return track

@@ -114,6 +114,16 @@ void BindEstimate(py::module_& m) {
            py::arg("normalize_albedo") = true,
            py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
   BindTrackerMethods<ShadowTracker>(shadow_tracker);
+  shadow_tracker.def(
+      "track_toward",
+      [](ShadowTracker& t, const py::object& frame, const Eigen::Vector3d& predicted) {
+        const cv::Mat img = GrayArg(frame);
+        py::gil_scoped_release release;
+        return t.Track(img, predicted);
+      },
+      py::arg("frame"), py::arg("predicted_sun_in_world"),
+      "Next frame, searched around the given Sun (the whole-clip path's) instead of the "
+      "tracker's own prediction.");
   py::class_<ThesisTracker> thesis_tracker(m, "ThesisTracker",
                             "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
   thesis_tracker.def(py::init([](const Scene& scene, const Camera& camera,

@@ -8,6 +8,7 @@ void BindScene(py::module_& m);
 void BindEphemeris(py::module_& m);
 void BindEstimate(py::module_& m);
 void BindCalibration(py::module_& m);
+void BindSky(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -17,4 +18,5 @@ PYBIND11_MODULE(_native, m) {
   sunlapse::python::BindEphemeris(m);
   sunlapse::python::BindEstimate(m);
   sunlapse::python::BindCalibration(m);
+  sunlapse::python::BindSky(m);
 }

@@ -597,15 +597,24 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector
   return out;
 }
 
-TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
+TrackedFrame ShadowTracker::Track(const cv::Mat& frame) { return TrackImpl(frame, nullptr); }
+
+TrackedFrame ShadowTracker::Track(const cv::Mat& frame, const Eigen::Vector3d& predicted_sun_in_world) {
+  Require(predicted_sun_in_world.allFinite() && predicted_sun_in_world.z() > 0,
+          "predicted_sun_in_world must point above the horizon");
+  const Eigen::Vector3d p = predicted_sun_in_world.normalized();
+  return TrackImpl(frame, &p);
+}
+
+TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame, const Eigen::Vector3d* given) {
   Impl& s = *impl_;
   Require(s.initialized, "Track() before Initialize()");
   Require(frame.empty() || frame.type() == CV_32FC1, "frame: expected float32 gray");
   const auto t0 = std::chrono::steady_clock::now();
   TrackedFrame out;
-  // Prediction: the Sun keeps its last angular velocity.
-  Eigen::Vector3d pred = s.sun;
-  if (s.have_velocity) {
+  // Prediction: the given Sun, or the last one kept at its angular velocity.
+  Eigen::Vector3d pred = given ? *given : s.sun;
+  if (!given && s.have_velocity) {
     const Eigen::Vector3d axis = s.sun_before.cross(s.sun);
     const double angle = std::atan2(axis.norm(), s.sun_before.dot(s.sun));
     if (axis.norm() > 1e-12) {

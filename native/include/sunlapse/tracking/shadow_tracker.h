@@ -92,8 +92,12 @@ class ShadowTracker {
                           const Eigen::Vector3d& sun_in_world);
   // The next frame. An empty Mat marks a frame that could not be decoded.
   TrackedFrame Track(const cv::Mat& frame);
+  // The same, searching around a given Sun instead of the tracker's own
+  // prediction (the whole-clip path's direction: sky/sun_path.h).
+  TrackedFrame Track(const cv::Mat& frame, const Eigen::Vector3d& predicted_sun_in_world);
 
  private:
+  TrackedFrame TrackImpl(const cv::Mat& frame, const Eigen::Vector3d* predicted);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

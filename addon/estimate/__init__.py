@@ -1,0 +1,1 @@
+"""bpy-free estimation controllers over the native core."""

@@ -1,0 +1,217 @@
+"""The Sun over the whole clip at once (bpy-free controller over _native).
+
+Frames in, raw per-frame Suns out:
+
+1. a visibility table of the model's visible surfaces over the whole sky
+   (native SkyEvidence), with each surface sample's reference level taken
+   from frames spread over the clip;
+2. every frame scored against every sky direction (table look-ups);
+3. the Sun's path chosen globally (native solve_sun_path): segments where
+   the capture times jump back, the frame size changes, or the evidence
+   demands a jump the times do not explain;
+4. each segment refined to sub-degree by the shadow tracker, searching
+   around the path's direction on every frame (no anchor frame, no
+   re-acquisition heuristics).
+
+Smoothing and the track file are the caller's (pipeline.py); smoothing never
+crosses a segment boundary and never reaches past a segment's last measured
+frame.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, List, Optional, Sequence
+
+import numpy as np
+
+from .. import native_loader
+
+# Frames spread over the clip whose high quantile per surface sample is its
+# reference level (its albedo times its usual lit level).
+REFERENCE_FRAMES = 24
+# A refined Sun further than this many grid spacings from the path's
+# direction is not believed (the tracker locked onto something else).
+REFINE_MAX_SPACINGS = 2.5
+# Confidence of a frame grows with its evidence's lead over directions well
+# away from the chosen one (log-likelihood units, see sky_evidence.h): full
+# at this lead.
+FULL_CONFIDENCE_MARGIN = 12.0
+# Confidence of frames the path carries (no evidence of their own).
+CARRIED_CONFIDENCE = 0.05
+
+
+@dataclass
+class RawFrame:
+    """One frame's raw estimate. Angles are world-frame (azimuth from +Y);
+    None with a reason when the frame has no estimate."""
+    frame: int
+    zenith_deg: Optional[float] = None
+    azimuth_world_deg: Optional[float] = None
+    confidence: float = 0.0
+    reason: Optional[str] = None
+    segment: int = 0
+    measured: bool = False        # the frame's own evidence supports it
+    refined: bool = False         # the tracker refined it to sub-degree
+    tracked: object = None        # native TrackedFrame when refined
+
+
+@dataclass
+class WholeClipResult:
+    frames: List[RawFrame] = field(default_factory=list)   # in the order given
+    segments: List[List[int]] = field(default_factory=list)  # frame numbers per segment
+    jumps: List[int] = field(default_factory=list)  # frames after an unexplained jump
+    anchor: Optional[int] = None   # the best-supported frame (for notes)
+    timing: dict = field(default_factory=dict)
+    message: Optional[str] = None
+
+
+class Cancelled(Exception):
+    """The progress callback asked to stop."""
+
+
+def sun_in_world(zenith_deg: float, azimuth_world_deg: float) -> np.ndarray:
+    z, a = math.radians(zenith_deg), math.radians(azimuth_world_deg)
+    return np.array([math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)])
+
+
+def angles_of(sun_in_world_vec) -> tuple:
+    x, y, z = (float(v) for v in sun_in_world_vec)
+    n = math.sqrt(x * x + y * y + z * z)
+    zen = math.degrees(math.acos(max(-1.0, min(1.0, z / n))))
+    return zen, math.degrees(math.atan2(x, y)) % 360.0
+
+
+def _angle_deg(a, b) -> float:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(np.dot(a, b))))
+
+
+def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
+    """k positions spread evenly over range(n) (all of them when n <= k)."""
+    if n <= k:
+        return list(range(n))
+    return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
+
+
+def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Optional[np.ndarray]],
+             ground_object_ids: Sequence[int], times_s: Optional[Sequence[float]] = None,
+             ignore_top_rows: int = 0,
+             progress: Optional[Callable[[float], object]] = None) -> WholeClipResult:
+    """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
+    the frame as float32 linear gray of the camera's size, or None when it
+    cannot be decoded or is not the camera's size. `times_s`: capture times
+    in seconds (None when unknown)."""
+    native = native_loader.require()
+    frames = list(frames)
+    n = len(frames)
+    result = WholeClipResult()
+    t0 = time.perf_counter()
+
+    def tick(fraction):
+        if progress is not None and progress(fraction) is False:
+            raise Cancelled()
+
+    opts = native.SkyEvidenceOptions()
+    opts.ignore_top_rows = ignore_top_rows
+    sky = native.SkyEvidence(scene, camera, opts)
+    t_table = time.perf_counter() - t0
+    reference = [read_gray(frames[i]) for i in spread(n)]
+    used = sky.set_reference(reference)
+    del reference
+    t_setup = time.perf_counter() - t0
+    if used == 0:
+        result.frames = [RawFrame(f, reason="no frame of the clip could be read") for f in frames]
+        result.message = "no frame of the clip could be read"
+        return result
+
+    # Pass 1: evidence for every frame.
+    status, reasons = [], []
+    ok = native.FrameEvidenceStatus.OK
+    for k, f in enumerate(frames):
+        tick(0.5 * k / n)
+        e = sky.add_frame(read_gray(f))
+        status.append(e.status)
+        reasons.append(e.message or None)
+    t_evidence = time.perf_counter() - t0
+
+    # Segments the caller knows of: capture times going back.
+    starts = [0] * n
+    if times_s is not None:
+        for k in range(1, n):
+            if times_s[k] < times_s[k - 1]:
+                starts[k] = 1
+    path = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts)
+    if not path["success"]:
+        result.frames = [RawFrame(f, reason=path["message"] or reasons[k] or "no evidence")
+                         for k, f in enumerate(frames)]
+        result.message = path["message"]
+        return result
+    directions = sky.directions
+    spacing = sky.spacing_deg
+    seg = 0
+    bounds = [0]
+    for k in range(1, n):
+        if path["jump_before"][k]:
+            seg += 1
+            bounds.append(k)
+            if not starts[k]:
+                result.jumps.append(frames[k])
+    bounds.append(n)
+    margins = path["margin"]
+    measured = path["measured"]
+    best = max(range(n), key=lambda k: (measured[k], margins[k]))
+    result.anchor = frames[best] if measured[best] else None
+
+    # Pass 2: refine each segment from its first measured frame on.
+    tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
+                                   ignore_top_rows=ignore_top_rows)
+    raws: List[RawFrame] = []
+    track_seconds = 0.0
+    for s in range(len(bounds) - 1):
+        lo, hi = bounds[s], bounds[s + 1]
+        result.segments.append(frames[lo:hi])
+        first = next((k for k in range(lo, hi) if measured[k]), None)
+        last = next((k for k in range(hi - 1, lo - 1, -1) if measured[k]), None)
+        initialized = False
+        for k in range(lo, hi):
+            tick(0.5 + 0.5 * k / n)
+            f = frames[k]
+            raw = RawFrame(f, segment=s, measured=bool(measured[k]))
+            raws.append(raw)
+            if status[k] != ok and status[k] != native.FrameEvidenceStatus.NO_SHADOWS:
+                raw.reason = reasons[k] or "no evidence on this frame"
+                continue
+            if first is None or k < first or k > last:
+                # Beyond the segment's measured frames: nothing to carry.
+                raw.reason = "no shadow evidence on this frame or around it in its segment"
+                continue
+            d = directions[path["direction"][k]]
+            gray = read_gray(f) if (measured[k] or initialized) else None
+            refined = None
+            if gray is not None and measured[k] and not initialized:
+                init = tracker.initialize(gray, d)
+                initialized = init.ok
+            if gray is not None and initialized:
+                r = tracker.track_toward(gray, d)
+                track_seconds += r.seconds
+                if r.ok and _angle_deg(r.sun_in_world, d) <= REFINE_MAX_SPACINGS * spacing:
+                    refined = r
+            support = max(0.0, min(1.0, margins[k] / FULL_CONFIDENCE_MARGIN))
+            if refined is not None:
+                raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg
+                raw.refined, raw.tracked = True, refined
+                raw.confidence = refined.confidence * (support if measured[k] else CARRIED_CONFIDENCE)
+            else:
+                raw.zenith_deg, raw.azimuth_world_deg = angles_of(d)
+                raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE
+    result.frames = raws
+    t_end = time.perf_counter() - t0
+    result.timing = {"table_s": t_table, "reference_s": t_setup - t_table,
+                     "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
+                     "tracking_ms_per_frame": 1000.0 * track_seconds / max(1, n),
+                     "total_s": t_end, "samples": sky.num_samples,
+                     "directions": len(directions), "spacing_deg": spacing}
+    return result

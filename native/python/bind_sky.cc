@@ -1,0 +1,162 @@
+// Bindings of the sky stage: whole-sky evidence per frame and the Sun's path.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <opencv2/core.hpp>
+
+#include "arrays.h"
+#include "sunlapse/sky/sky_evidence.h"
+#include "sunlapse/sky/sun_path.h"
+
+namespace sunlapse::python {
+namespace {
+
+cv::Mat GrayOrEmpty(const py::object& frame) {
+  if (frame.is_none()) return {};
+  const py::array a = frame.cast<py::array>();
+  const float* data = CheckArray<float>(a, "frame", {-1, -1});
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                 CV_32FC1, const_cast<float*>(data));
+}
+
+}  // namespace
+
+void BindSky(py::module_& m) {
+  py::class_<SkyEvidenceOptions>(m, "SkyEvidenceOptions",
+                                 "Options of SkyEvidence (sky_evidence.h).")
+      .def(py::init<>())
+      .def_readwrite("num_directions", &SkyEvidenceOptions::num_directions)
+      .def_readwrite("max_zenith_deg", &SkyEvidenceOptions::max_zenith_deg)
+      .def_readwrite("max_samples", &SkyEvidenceOptions::max_samples)
+      .def_readwrite("ignore_top_rows", &SkyEvidenceOptions::ignore_top_rows)
+      .def_readwrite("ignore_bottom_rows",
+                     &SkyEvidenceOptions::ignore_bottom_rows)
+      .def_readwrite("normal_bin_deg", &SkyEvidenceOptions::normal_bin_deg)
+      .def_readwrite("min_side_samples", &SkyEvidenceOptions::min_side_samples)
+      .def_readwrite("max_ratio", &SkyEvidenceOptions::max_ratio)
+      .def_readwrite("reference_quantile",
+                     &SkyEvidenceOptions::reference_quantile)
+      .def_readwrite("rival_exclusion_deg",
+                     &SkyEvidenceOptions::rival_exclusion_deg)
+      .def_readwrite("samples_per_observation",
+                     &SkyEvidenceOptions::samples_per_observation)
+      .def("check", &SkyEvidenceOptions::Check);
+
+  py::class_<SunPathOptions>(m, "SunPathOptions",
+                             "Options of solve_sun_path (sun_path.h).")
+      .def(py::init<>())
+      .def_readwrite("evidence_weight", &SunPathOptions::evidence_weight)
+      .def_readwrite("step_weight", &SunPathOptions::step_weight)
+      .def_readwrite("jump_cost", &SunPathOptions::jump_cost)
+      .def_readwrite("max_step_deg", &SunPathOptions::max_step_deg)
+      .def_readwrite("max_speed_deg_per_hour",
+                     &SunPathOptions::max_speed_deg_per_hour)
+      .def_readwrite("min_explained", &SunPathOptions::min_explained)
+      .def_readwrite("min_margin", &SunPathOptions::min_margin)
+      .def_readwrite("rival_exclusion_deg",
+                     &SunPathOptions::rival_exclusion_deg)
+      .def("check", &SunPathOptions::Check);
+
+  py::enum_<FrameEvidence::Status>(m, "FrameEvidenceStatus")
+      .value("OK", FrameEvidence::Status::kOk)
+      .value("NO_FRAME", FrameEvidence::Status::kNoFrame)
+      .value("UNUSABLE", FrameEvidence::Status::kUnusable)
+      .value("NO_SHADOWS", FrameEvidence::Status::kNoShadows);
+
+  py::class_<FrameEvidence>(m, "FrameEvidence")
+      .def_readonly("status", &FrameEvidence::status)
+      .def_readonly("message", &FrameEvidence::message)
+      .def_readonly("best_direction", &FrameEvidence::best_direction)
+      .def_readonly("best_explained", &FrameEvidence::best_explained)
+      .def_readonly("margin", &FrameEvidence::margin)
+      .def_readonly("exposure", &FrameEvidence::exposure)
+      .def_readonly("seconds", &FrameEvidence::seconds);
+
+  py::class_<SkyEvidence>(
+      m, "SkyEvidence",
+      "Whole-sky evidence per frame by table look-ups (sky_evidence.h).")
+      .def(py::init([](const Scene& scene, const Camera& camera,
+                       const SkyEvidenceOptions& o) {
+             py::gil_scoped_release release;
+             return std::make_unique<SkyEvidence>(scene, camera, o);
+           }),
+           py::arg("scene"), py::arg("camera"),
+           py::arg("options") = SkyEvidenceOptions(), py::keep_alive<1, 2>(),
+           py::keep_alive<1, 3>())
+      .def_property_readonly("num_samples", &SkyEvidence::num_samples)
+      .def_property_readonly("num_frames", &SkyEvidence::num_frames)
+      .def_property_readonly("build_seconds", &SkyEvidence::build_seconds)
+      .def_property_readonly(
+          "spacing_deg",
+          [](const SkyEvidence& e) { return e.grid().spacing_deg(); })
+      .def_property_readonly(
+          "directions",
+          [](const SkyEvidence& e) {
+            const auto& d = e.grid().directions();
+            py::array_t<double> out(
+                {static_cast<py::ssize_t>(d.size()), py::ssize_t(3)});
+            auto w = out.mutable_unchecked<2>();
+            for (size_t i = 0; i < d.size(); ++i) {
+              for (int k = 0; k < 3; ++k) w(i, k) = d[i][k];
+            }
+            return out;
+          })
+      .def(
+          "set_reference",
+          [](SkyEvidence& e, const py::list& frames) {
+            std::vector<cv::Mat> mats;
+            for (const py::handle& f : frames)
+              mats.push_back(
+                  GrayOrEmpty(py::reinterpret_borrow<py::object>(f)));
+            py::gil_scoped_release release;
+            return e.SetReference(mats);
+          },
+          py::arg("frames"),
+          "Reference level of every sample from frames spread over the clip "
+          "(float32 (H,W) "
+          "linear gray, None skipped); returns how many were used.")
+      .def(
+          "add_frame",
+          [](SkyEvidence& e, const py::object& frame) {
+            const cv::Mat img = GrayOrEmpty(frame);
+            py::gil_scoped_release release;
+            return e.AddFrame(img);
+          },
+          py::arg("frame"),
+          "Scores the next frame (float32 (H,W) linear gray, or None).")
+      .def("cost", &SkyEvidence::Cost, py::arg("k"),
+           "Each direction's cost on frame k.");
+
+  m.def(
+      "solve_sun_path",
+      [](const SkyEvidence& e, const std::vector<double>& times_s,
+         const std::vector<uint8_t>& segment_start, const SunPathOptions& o) {
+        SunPathResult r;
+        {
+          py::gil_scoped_release release;
+          r = SolveSunPath(e, times_s, segment_start, o);
+        }
+        py::dict out;
+        out["success"] = r.status == SunPathResult::Status::kSuccess;
+        out["message"] = r.message;
+        out["direction"] = r.direction;
+        out["jump_before"] =
+            std::vector<bool>(r.jump_before.begin(), r.jump_before.end());
+        out["measured"] =
+            std::vector<bool>(r.measured.begin(), r.measured.end());
+        out["explained"] = r.explained;
+        out["margin"] = r.margin;
+        out["cost"] = r.cost;
+        return out;
+      },
+      py::arg("evidence"), py::arg("times_s") = std::vector<double>(),
+      py::arg("segment_start") = std::vector<uint8_t>(),
+      py::arg("options") = SunPathOptions(),
+      "The Sun's path over the evidence's frames (sun_path.h): per frame a "
+      "grid direction, "
+      "jump flags, whether the frame's evidence supports it.");
+}
+
+}  // namespace sunlapse::python
