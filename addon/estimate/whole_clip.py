@@ -175,7 +175,7 @@ def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Op
         result.segments.append(frames[lo:hi])
         first = next((k for k in range(lo, hi) if measured[k]), None)
         last = next((k for k in range(hi - 1, lo - 1, -1) if measured[k]), None)
-        initialized = False
+        initialized = follow = False
         for k in range(lo, hi):
             tick(0.5 + 0.5 * k / n)
             f = frames[k]
@@ -195,10 +195,16 @@ def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Op
                 init = tracker.initialize(gray, d)
                 initialized = init.ok
             if gray is not None and initialized:
-                r = tracker.track_toward(gray, d)
-                track_seconds += r.seconds
-                if r.ok and _angle_deg(r.sun_in_world, d) <= REFINE_MAX_SPACINGS * spacing:
-                    refined = r
+                # The tracker's own prediction (the last refined Suns' motion)
+                # is finer than the path's grid cell; the path's direction is
+                # the check, and the fallback when the tracker has drifted.
+                for attempt in ("own", "path") if follow else ("path",):
+                    r = tracker.track(gray) if attempt == "own" else tracker.track_toward(gray, d)
+                    track_seconds += r.seconds
+                    if r.ok and _angle_deg(r.sun_in_world, d) <= REFINE_MAX_SPACINGS * spacing:
+                        refined = r
+                        break
+            follow = refined is not None
             support = max(0.0, min(1.0, margins[k] / FULL_CONFIDENCE_MARGIN))
             if refined is not None:
                 raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg

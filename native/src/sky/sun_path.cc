@@ -71,7 +71,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     out.message = "no frame shows shadows the model can cast";
     return out;
   }
-  const double slack = 1.5 * grid.spacing_deg();
+  const double slack = 2.0 * grid.spacing_deg();
   auto radius = [&](int t) {  // allowed motion from frame t-1 to t (deg)
     const double dt = times_s.empty() ? NAN : times_s[t] - times_s[t - 1];
     if (std::isfinite(dt))

@@ -27,7 +27,7 @@ struct SunPathOptions {
   double step_weight = 0.1;
   // Cost of a jump beyond the allowed radius (a time jump in the clip).
   // Negative: jumps are not allowed.
-  double jump_cost = 20.0;
+  double jump_cost = 40.0;
   // Largest Sun motion per frame when the frames' times are unknown (deg).
   double max_step_deg = 6.0;
   // Apparent angular speed bound of the Sun (deg per hour) when times are
