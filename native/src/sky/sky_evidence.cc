@@ -105,14 +105,18 @@ struct SkyEvidence::Impl {
   const Camera& camera;
   SkyEvidenceOptions o;
   SkyGrid grid;
-  // Samples: pixel, group; lit[d * S + s] = 1 when direction d reaches it.
+  // Samples: pixel and planar group.
   std::vector<Eigen::Vector2f> pixels;
   std::vector<int> group;
   int num_groups = 0;
-  std::vector<uint8_t> lit;
-  std::vector<float> reference;  // empty until SetReference
-  std::vector<uint8_t> scores;   // frames x directions, cost x 10, clipped
-  std::vector<float> best;       // per frame, the best explained share
+  // Per direction the samples it does not light (in shade or facing away),
+  // as offsets into one array: usually the smaller side, so a frame's sums
+  // run over them and the lit side is the group's total minus them.
+  std::vector<int32_t> shaded;
+  std::vector<int64_t> shaded_begin;  // size D + 1
+  std::vector<float> reference;       // empty until SetReference
+  std::vector<uint8_t> scores;        // frames x directions, cost x 10, clipped
+  std::vector<float> best;            // per frame, the best explained share
   int frames = 0;
   double build_seconds = 0.0;
 
@@ -188,17 +192,28 @@ struct SkyEvidence::Impl {
     for (int s = 0; s < s_count; ++s) {
       for (int k = 0; k < 3; ++k) flat[3 * s + k] = origin[s][k];
     }
-    lit.assign(static_cast<size_t>(grid.size()) * s_count, 0);
+    std::vector<std::vector<int32_t>> per_direction(grid.size());
     const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
     tbb::parallel_for(0, grid.size(), [&](int d) {
       const Eigen::Vector3f dir = grid.direction(d).cast<float>();
       std::vector<uint8_t> occluded(s_count);
       scene.OccludedToward(s_count, flat.data(), dir, 0.f, far,
                            occluded.data());
-      uint8_t* row = &lit[static_cast<size_t>(d) * s_count];
-      for (int s = 0; s < s_count; ++s)
-        row[s] = !occluded[s] && normal[s].dot(dir) > 0.02f;
+      for (int s = 0; s < s_count; ++s) {
+        if (occluded[s] || normal[s].dot(dir) <= 0.02f)
+          per_direction[d].push_back(s);
+      }
     });
+    shaded_begin.assign(grid.size() + 1, 0);
+    for (int d = 0; d < grid.size(); ++d) {
+      shaded_begin[d + 1] =
+          shaded_begin[d] + static_cast<int64_t>(per_direction[d].size());
+    }
+    shaded.resize(shaded_begin.back());
+    for (int d = 0; d < grid.size(); ++d) {
+      std::copy(per_direction[d].begin(), per_direction[d].end(),
+                shaded.begin() + shaded_begin[d]);
+    }
     build_seconds = Seconds(t0);
   }
 
@@ -238,9 +253,12 @@ const std::vector<uint8_t>& SkyEvidence::scores() const {
 std::vector<uint8_t> SkyEvidence::LitFrom(int direction) const {
   Require(direction >= 0 && direction < impl_->grid.size(),
           "direction out of range");
-  const auto begin =
-      impl_->lit.begin() + static_cast<size_t>(direction) * impl_->S();
-  return std::vector<uint8_t>(begin, begin + impl_->S());
+  std::vector<uint8_t> out(impl_->S(), 1);
+  for (int64_t i = impl_->shaded_begin[direction];
+       i < impl_->shaded_begin[direction + 1]; ++i) {
+    out[impl_->shaded[i]] = 0;
+  }
+  return out;
 }
 
 std::vector<float> SkyEvidence::Cost(int k) const {
@@ -365,31 +383,31 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
     return keep();
   }
   const int min_side = m.o.min_side_samples;
+  std::vector<float> rf(r.begin(), r.end());
   tbb::parallel_for(0, D, [&](int d) {
-    const uint8_t* row = &m.lit[static_cast<size_t>(d) * S];
-    double n1[64], s1[64];
-    std::vector<double> n1v, s1v;
-    double* pn = n1;
-    double* ps = s1;
+    double n0[64], s0[64];
+    std::vector<double> n0v, s0v;
+    double* pn = n0;
+    double* ps = s0;
     if (G > 64) {
-      n1v.assign(G, 0), s1v.assign(G, 0);
-      pn = n1v.data(), ps = s1v.data();
+      n0v.assign(G, 0), s0v.assign(G, 0);
+      pn = n0v.data(), ps = s0v.data();
     } else {
-      std::fill(n1, n1 + G, 0.0), std::fill(s1, s1 + G, 0.0);
+      std::fill(n0, n0 + G, 0.0), std::fill(s0, s0 + G, 0.0);
     }
-    for (int s = 0; s < S; ++s) {
-      if (row[s]) {
-        const int g = m.group[s];
-        pn[g] += 1, ps[g] += r[s];
-      }
+    const int32_t* idx = m.shaded.data();
+    for (int64_t i = m.shaded_begin[d]; i < m.shaded_begin[d + 1]; ++i) {
+      const int32_t s = idx[i];
+      const int g = m.group[s];
+      pn[g] += 1, ps[g] += rf[s];
     }
     // Explained variance of a two-level (lit/shaded) split per group, only
     // where the predicted shade is darker than the predicted light.
     double gain = 0;
     for (int g = 0; g < G; ++g) {
-      const double a = pn[g], b = n_g[g] - pn[g];
+      const double b = pn[g], a = n_g[g] - pn[g];  // shaded, lit
       if (a < min_side || b < min_side) continue;
-      const double mean_lit = ps[g] / a, mean_shade = (sum_g[g] - ps[g]) / b;
+      const double mean_lit = (sum_g[g] - ps[g]) / a, mean_shade = ps[g] / b;
       if (mean_shade >= mean_lit) continue;
       const double between =
           a * b / n_g[g] * (mean_lit - mean_shade) * (mean_lit - mean_shade);
