@@ -1,9 +1,12 @@
 """The estimation pipeline, shared by the scripted run and the operators.
 
 bpy-free: it takes what bridge.py gathered and returns a trackfile.Track.
-Frames are streamed from the clip one at a time (memory does not grow with
-its length): the first gets the initial Sun (thesis ch. 3), the rest are
-tracked by their shadows (ch. 4), then the angles are smoothed (§5).
+Frames are streamed from the clip (memory does not grow with its length).
+Ours (method "default") finds the Sun over the whole clip at once
+(estimate/whole_clip.py); the thesis's baseline, and the tracker alone from a
+given Sun, take the initial Sun on the first frame (thesis ch. 3) and track
+the rest by their shadows (ch. 4). Then the angles are smoothed (§5), per
+segment.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
 from .estimate import whole_clip
-from .core import evaluation, frametimes, smoothing, sunpath, trackfile
+from .core import frametimes, smoothing, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -26,23 +29,6 @@ TWO_PASS_DEGREE = {"thesis": 1, "default": 3}
 # online mode): near the zenith the azimuth swings too fast for either
 # (core.smoothing.two_pass_directions, online_directions).
 SMOOTHING_SPACE = {"thesis": "angles", "default": "directions"}
-# Consecutive frames without shadows (that do show the scene) before the Sun
-# is searched for again from scratch.
-REACQUIRE_AFTER = 2
-# Tracking confidence below this counts toward re-acquisition (steady
-# tracking scores 0.9 and more on the rendered presets).
-DOUBTFUL_CONFIDENCE = 0.5
-# A re-acquisition that finds the Sun within this of the tracker's own
-# (doubtful) answer confirms the tracker: the threshold above then doubles
-# (up to REACQUIRE_MAX), so glare that keeps the confidence low for hours
-# does not cost a search every other frame. A confident frame resets it.
-REACQUIRE_AGREE_DEG = 2.0
-REACQUIRE_MAX = 64
-# Frames (in capture order) tried for a confident initial Sun before the run
-# settles for the best of them.
-ACQUIRE_TRIES = 8
-
-
 class PipelineError(Exception):
     """The run cannot go on (unreadable clip, cancelled, ...): says why."""
 
@@ -257,56 +243,11 @@ def _physical(native, track, numbers, raws, options, north):
     return fit.zenith_deg, fit.azimuth_deg, fit.north_offset_deg
 
 
-class _ShadowSearchLazy:
-    """acquire.ShadowSearch with its background, built on first use only."""
-
-    def __init__(self, scene, camera, clip_path, clip_frame_start, frames, options):
-        self.args = (scene, camera, clip_path, clip_frame_start, list(frames), options)
-        self.search = self.back = None
-        self.failed = False
-
-    def _build(self):
-        scene, camera, clip_path, clip_frame_start, frames, options = self.args
-        picks = acquire.spread(frames)
-        grays = []
-        reader = open_clip(clip_path, picks[0] - clip_frame_start)  # one reader, seeking
-        for f in picks:
-            try:
-                bgr = reader.read() if reader.seek(f - clip_frame_start) else None
-            except StopIteration:
-                bgr = None
-            if bgr is not None:
-                grays.append(_gray(bgr, camera, options.method))
-        self.back = acquire.background(grays, options.ignore_top_rows)
-        if self.back is not None:
-            self.search = acquire.ShadowSearch(scene, camera, options.ground_object_ids,
-                                               top=options.ignore_top_rows)
-
-    def run(self, gray) -> Optional[dict]:
-        """An initial-Sun result (as estimate_initial's) from the shadows, or
-        None when the clip has too few frames or no shadow matches."""
-        if self.search is None and not self.failed:
-            self._build()
-            self.failed = self.search is None
-        if self.search is None:
-            return None
-        r = self.search.search(gray, self.back)
-        if r["sun_in_world"] is None or r["message"]:
-            return None
-        return {"success": True, "source": "shadow_search",
-                "zenith_deg": r["zenith_deg"], "azimuth_deg": r["azimuth_deg"],
-                "sun_in_world": r["sun_in_world"], "confidence": r["precision"],
-                "residual_rms": None, "spread_deg": None, "sun_intensity": None,
-                "ambient_intensity": None, "seconds": r["seconds"],
-                "message": f"found by its cast shadows ({100 * r['precision']:.0f}% of the "
-                           f"predicted shadow is dark)"}
-
-
 def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
         options: RunOptions, progress: Optional[Callable[[float], bool]] = None
         ) -> trackfile.Track:
     """Estimates the Sun on `frames` (consecutive scene frame numbers)."""
-    native = native_loader.require()
+    native_loader.require()
     if not options.ground_object_ids:
         raise PipelineError("no ground object: name the ground the shadows fall on "
                             "(--ground, or Ground in the panel)")
@@ -340,163 +281,78 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     if options.method == "default" and options.initial_sun is None:
         return _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
                                progress, t0)
-    search = _ShadowSearchLazy(scene, camera, clip_path, clip_frame_start, frames, options)
-    # The anchor: the first frame (in capture order) whose Sun is clear. The
-    # thesis starts on frame 1 whatever it shows; a dawn frame whose shadow
-    # has left the model, or a frame whose shading cannot tell the Sun, would
-    # send the tracker after the wrong shadow for the whole clip. So ours
-    # tries the next frames until one gives a confident Sun (shading, then
-    # the cast-shadow search), tracks forward from it, and then goes back
-    # from it to the frames before. The thesis mode and a given Sun anchor on
-    # the first frame.
-    tries = 1 if (options.method == "thesis" or options.initial_sun is not None) \
-        else min(ACQUIRE_TRIES, len(visit))
-    best = None  # (confidence, position, init, gray, bgr)
-    tried = []
-    for p in range(tries):
-        try:
-            bgr = source.read(visit[p])
-        except StopIteration:
-            bgr = None
-        if bgr is None:
-            tried.append({"frame": visit[p], "confidence": None, "message": "not decodable"})
-            continue
-        gray = _gray(bgr, camera, options.method)
-        sub = None if progress is None else (lambda f, p=p: progress(0.1 * (p + f) / tries))
-        if options.initial_sun is not None:
-            init = _given_initial(*options.initial_sun, north)
-            track.method["initial"] = "given"
-        else:
-            init = estimate_initial(scene, camera, bgr, options, sub, gray=gray)
-        # Shading alone may leave the Sun undetermined (flat ground, thin
-        # casters): then the Sun is searched for by its cast shadows.
-        if options.initial_sun is None and options.method != "thesis" and (
-                not init["success"] or init["confidence"] < DOUBTFUL_CONFIDENCE):
-            found = search.run(gray)
-            if found is not None:
-                init = found
-        conf = init["confidence"] if init["success"] else -1.0
-        tried.append({"frame": visit[p], "confidence": max(conf, 0.0),
-                      "message": init["message"] or None})
-        if best is None or conf > best[0]:
-            best = (conf, p, init, gray, bgr)
-        if conf >= DOUBTFUL_CONFIDENCE:
-            break
-    if best is None:
+    return _run_tracked(scene, camera, source, frames, visit, times, options, track, progress, t0)
+
+
+def _run_tracked(scene, camera, source, frames, visit, times, options, track, progress, t0):
+    """The thesis's way (the baseline), and the tracker alone from a given
+    Sun: the initial Sun on the first frame in capture order, then the
+    shadow tracker frame after frame."""
+    native = native_loader.require()
+    north = options.north_offset_deg
+    try:
+        bgr0 = source.read(visit[0])
+    except StopIteration:
+        bgr0 = None
+    if bgr0 is None:
         raise PipelineError(f"frame {visit[0]} of the clip cannot be decoded")
-    _, anchor, init, anchor_gray, anchor_bgr = best
-    if init.get("source") == "shadow_search":
-        track.method["initial"] = "shadow_search"
-    if len(tried) > 1:
-        track.extra["initial_tries"] = tried
+    gray0 = _gray(bgr0, camera, options.method)
+    if options.initial_sun is not None:
+        init = _given_initial(*options.initial_sun, north)
+        track.method["initial"] = "given"
+    else:
+        init = estimate_initial(scene, camera, bgr0, options,
+                                None if progress is None else (lambda f: progress(0.1 * f)),
+                                gray=gray0)
     if not init["success"]:
         reason = f"initial Sun failed: {init['message']}"
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
         track.extra["message"] = reason
         return track
     az0 = (init["azimuth_deg"] - north) % 360.0
-    track.initial = {"frame": visit[anchor], "zenith_deg": init["zenith_deg"],
-                     "azimuth_deg": az0,
+    track.initial = {"frame": visit[0], "zenith_deg": init["zenith_deg"], "azimuth_deg": az0,
                      "residual": init["residual_rms"], "confidence": init["confidence"],
                      "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
                      "ambient_intensity": init["ambient_intensity"],
                      "seconds": init["seconds"], "message": init["message"] or None}
-
-    # A few frames spread over the clip, kept as they stream past, make its
-    # shadow-free background (for the unmodelled-shadow note); bounded memory.
+    # Frames spread over the clip, kept as they stream past, make its
+    # shadow-free background for the unmodelled-shadow note (ours only).
     sample_at = set(acquire.spread(frames)) if options.method != "thesis" else set()
-    samples = {visit[anchor]: anchor_bgr} if visit[anchor] in sample_at else {}
-
+    samples = {visit[0]: bgr0} if visit[0] in sample_at else {}
     if options.method == "thesis":
         tracker = native.ThesisTracker(scene, camera, options.ground_object_ids,
                                        ignore_top_rows=options.ignore_top_rows)
     else:
         tracker = native.ShadowTracker(scene, camera, options.ground_object_ids,
                                        ignore_top_rows=options.ignore_top_rows)
-    first = tracker.initialize(anchor_gray, init["sun_in_world"])
-    raws = [(visit[anchor], init["zenith_deg"], az0, init["confidence"], None, first)]
+    first = tracker.initialize(gray0, init["sun_in_world"])
+    raws = [(visit[0], init["zenith_deg"], az0, init["confidence"], None, first)]
     if not first.ok:
-        raws[0] = raws[0][:4] + (None, first)
         track.extra["tracking_message"] = first.reason
     track_seconds = 0.0
-    lost = 0
-    reacquire_after = REACQUIRE_AFTER
-    reacquired = []
-
-    def step(f):
-        """Tracks frame f from the tracker's last frame; appends to raws."""
-        nonlocal lost, track_seconds, reacquire_after
-        _check_progress(progress, 0.1 + 0.85 * len(raws) / len(frames))
+    for k, f in enumerate(visit[1:], start=1):
+        _check_progress(progress, 0.1 + 0.85 * k / len(visit))
         try:
             bgr = source.read(f)
         except StopIteration:
             raws.append((f, None, None, 0.0, "the clip ended before this frame", None))
-            return
-        gray = None if bgr is None else _gray(bgr, camera, options.method)
+            continue
         if bgr is not None and f in sample_at:
-            samples[f] = bgr  # a fresh array per read
-        r = tracker.track(gray)
+            samples[f] = bgr
+        r = tracker.track(None if bgr is None else _gray(bgr, camera, options.method))
         track_seconds += r.seconds
-        doubtful = not r.ok or r.confidence < DOUBTFUL_CONFIDENCE
-        lost = lost + 1 if doubtful else 0
-        if not doubtful:
-            reacquire_after = REACQUIRE_AFTER
-        # Lost, or barely holding on, on frames that do show the scene (not
-        # black or undecodable): the Sun has left the tracker's reach (a jump
-        # in the clip, a bad start). Find it again from scratch and start over.
-        if (lost >= reacquire_after and gray is not None and options.method != "thesis"
-                and (r.ok or r.reason.startswith(("shadow lost", "no cast shadow")))):
-            again = estimate_initial(scene, camera, bgr, options, gray=gray)
-            if not again["success"] or again["confidence"] <= 0.3:
-                again = search.run(gray) or again
-            if again["success"] and again["confidence"] > 0.3:
-                agree = r.ok and evaluation.angle_between_deg(
-                    again["sun_in_world"], r.sun_in_world) < REACQUIRE_AGREE_DEG
-                if agree:
-                    reacquire_after = min(2 * reacquire_after, REACQUIRE_MAX)
-                first = tracker.initialize(gray, again["sun_in_world"])
-                if first.ok and r.ok and not agree:
-                    # The tracker held on, doubtfully, and the fresh search
-                    # disagrees: the frame decides, by which Sun's shadows
-                    # part lit from shaded ground better (the sun/ambient
-                    # contrast of the robust fit over the whole ground).
-                    mine = tracker.initialize(gray, r.sun_in_world)
-                    if mine.ok and mine.contrast >= first.contrast:
-                        reacquire_after = min(2 * reacquire_after, REACQUIRE_MAX)
-                        lost = 0
-                        raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0,
-                                     r.confidence, None, r))
-                        return
-                    first = tracker.initialize(gray, again["sun_in_world"])
-                if first.ok:
-                    reacquired.append(f)
-                    lost = 0
-                    r_z, r_a = again["zenith_deg"], again["azimuth_deg"]
-                    raws.append((f, r_z, (r_a - north) % 360.0, again["confidence"], None, first))
-                    return
         if r.ok:
             raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
         else:
             raws.append((f, None, None, 0.0, r.reason, r))
-
-    for f in visit[anchor + 1:]:          # forward in time from the anchor
-        step(f)
-    if anchor > 0:                         # then back in time from it
-        tracker.initialize(anchor_gray, init["sun_in_world"])
-        lost = 0
-        for f in reversed(visit[:anchor]):
-            step(f)
     raws.sort(key=lambda r: r[0])  # back to frame order for smoothing and the file
     if options.method != "thesis":
-        _note_unmodelled_shadows(track, scene, camera, visit[anchor], anchor_bgr,
-                                 init["sun_in_world"], list(samples.values()), options)
-
+        _note_unmodelled_shadows(track, scene, camera, visit[0], bgr0, init["sun_in_world"],
+                                 list(samples.values()), options)
     _finish(native, track, raws, options, times, progress, [[r[0] for r in raws]])
-    if reacquired:
-        track.extra["reacquired_frames"] = reacquired
-    n_track = max(1, len(frames) - 1)
     track.extra["timing"] = {"initial_s": init["seconds"],
-                             "tracking_ms_per_frame": 1000.0 * track_seconds / n_track,
+                             "tracking_ms_per_frame": 1000.0 * track_seconds
+                             / max(1, len(frames) - 1),
                              "total_s": time.perf_counter() - t0}
     _check_progress(progress, 1.0)
     return track
