@@ -472,6 +472,8 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
     elif result.message:
         track.extra["message"] = result.message
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
+    if result.evidence:
+        track.extra["evidence"] = dict(result.evidence, frames=list(visit))
     if result.jumps:
         track.extra["jumps"] = result.jumps
     _finish(native, track, raws, options, times, progress, result.segments)

@@ -65,6 +65,9 @@ class WholeClipResult:
     jumps: List[int] = field(default_factory=list)  # frames after an unexplained jump
     anchor: Optional[int] = None   # the best-supported frame (for notes)
     timing: dict = field(default_factory=dict)
+    # Per frame (in the order given): the best explained share of the frame's
+    # variance and the chosen direction's lead over far rivals.
+    evidence: dict = field(default_factory=dict)
     message: Optional[str] = None
 
 
@@ -162,6 +165,9 @@ def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Op
     bounds.append(n)
     margins = path["margin"]
     measured = path["measured"]
+    result.evidence = {"explained": [round(float(v), 3) for v in path["explained"]],
+                       "margin": [round(float(v), 2) for v in margins],
+                       "significance": [round(float(v), 1) for v in path["significance"]]}
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None
 

@@ -53,7 +53,7 @@ void BindSky(py::module_& m) {
       .def_readwrite("max_step_deg", &SunPathOptions::max_step_deg)
       .def_readwrite("max_speed_deg_per_hour",
                      &SunPathOptions::max_speed_deg_per_hour)
-      .def_readwrite("min_explained", &SunPathOptions::min_explained)
+      .def_readwrite("min_significance", &SunPathOptions::min_significance)
       .def_readwrite("min_margin", &SunPathOptions::min_margin)
       .def_readwrite("rival_exclusion_deg",
                      &SunPathOptions::rival_exclusion_deg)
@@ -71,6 +71,7 @@ void BindSky(py::module_& m) {
       .def_readonly("best_direction", &FrameEvidence::best_direction)
       .def_readonly("best_explained", &FrameEvidence::best_explained)
       .def_readonly("margin", &FrameEvidence::margin)
+      .def_readonly("significance", &FrameEvidence::significance)
       .def_readonly("exposure", &FrameEvidence::exposure)
       .def_readonly("seconds", &FrameEvidence::seconds);
 
@@ -148,6 +149,7 @@ void BindSky(py::module_& m) {
             std::vector<bool>(r.measured.begin(), r.measured.end());
         out["explained"] = r.explained;
         out["margin"] = r.margin;
+        out["significance"] = r.significance;
         out["cost"] = r.cost;
         return out;
       },

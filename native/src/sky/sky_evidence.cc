@@ -95,6 +95,7 @@ void SkyEvidenceOptions::Check() const {
   Require(reference_quantile > 0 && reference_quantile < 1,
           "reference_quantile must be in (0, 1)");
   Require(rival_exclusion_deg >= 0, "rival_exclusion_deg must be >= 0");
+  Require(min_significance >= 0, "min_significance must be >= 0");
   Require(samples_per_observation >= 1, "samples_per_observation must be >= 1");
 }
 
@@ -117,6 +118,7 @@ struct SkyEvidence::Impl {
   std::vector<float> reference;       // empty until SetReference
   std::vector<uint8_t> scores;        // frames x directions, cost x 10, clipped
   std::vector<float> best;            // per frame, the best explained share
+  std::vector<float> significance;    // per frame, FrameEvidence::significance
   int frames = 0;
   double build_seconds = 0.0;
 
@@ -270,6 +272,11 @@ std::vector<float> SkyEvidence::Cost(int k) const {
   return out;
 }
 
+double SkyEvidence::Significance(int k) const {
+  Require(k >= 0 && k < impl_->frames, "frame index out of range");
+  return impl_->significance[k];
+}
+
 double SkyEvidence::BestExplained(int k) const {
   Require(k >= 0 && k < impl_->frames, "frame index out of range");
   return impl_->best[k];
@@ -334,6 +341,7 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
           std::lround(std::clamp(cost[d], 0.f, 25.5f) * 10.f));
     }
     m.best.push_back(out.best_explained);
+    m.significance.push_back(out.significance);
     ++m.frames;
     if (explained_out) *explained_out = explained;
     out.seconds = Seconds(t0);
@@ -423,8 +431,36 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   // unexplained beyond the best one, over the per-sample noise left by the
   // best one, divided by the samples per independent observation
   // (neighbouring samples share texture, blur and the model's misfit).
-  const double noise = std::max(1e-9, total * (1.0 - explained[best])) /
-                       std::max(1.0, S - 2.0 * G);
+  // The noise is the residuals' robust spread (1.4826 MAD): engraved lines,
+  // compression and a pixel of camera shake give heavy tails that would
+  // otherwise drown a thin shadow's evidence.
+  std::vector<double> level_lit(G, 0), level_shade(G, 0), count_shade(G, 0);
+  std::vector<uint8_t> shaded_best(S, 0);
+  for (int64_t i = m.shaded_begin[best]; i < m.shaded_begin[best + 1]; ++i) {
+    shaded_best[m.shaded[i]] = 1;
+  }
+  for (int s = 0; s < S; ++s) {
+    const int g = m.group[s];
+    if (shaded_best[s]) {
+      level_shade[g] += r[s], count_shade[g] += 1;
+    } else {
+      level_lit[g] += r[s];
+    }
+  }
+  std::vector<double> residual(S);
+  for (int s = 0; s < S; ++s) {
+    const int g = m.group[s];
+    const double lit_n = n_g[g] - count_shade[g];
+    const double level = shaded_best[s]
+                             ? level_shade[g] / std::max(1.0, count_shade[g])
+                             : level_lit[g] / std::max(1.0, lit_n);
+    residual[s] = std::abs(r[s] - level);
+  }
+  std::nth_element(residual.begin(), residual.begin() + S / 2, residual.end());
+  const double mad = 1.4826 * residual[S / 2];
+  const double noise = std::max(1e-9, std::min(total * (1.0 - explained[best]) /
+                                                   std::max(1.0, S - 2.0 * G),
+                                               mad * mad));
   const double scale = total / noise / (2.0 * m.o.samples_per_observation);
   for (int d = 0; d < D; ++d)
     cost[d] = static_cast<float>((explained[best] - explained[d]) * scale);
@@ -435,8 +471,10 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
       rival = std::max(rival, explained[d]);
   }
   out.margin = (explained[best] - rival) * scale;
-  out.status = out.best_explained > 0.02 ? FrameEvidence::Status::kOk
-                                         : FrameEvidence::Status::kNoShadows;
+  out.significance = explained[best] * scale;
+  out.status = out.significance >= m.o.min_significance
+                   ? FrameEvidence::Status::kOk
+                   : FrameEvidence::Status::kNoShadows;
   if (out.status == FrameEvidence::Status::kNoShadows) {
     out.message = "no direction's shadows match the frame (overcast?)";
     std::fill(cost.begin(), cost.end(), 0.f);

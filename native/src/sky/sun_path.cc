@@ -28,8 +28,7 @@ void SunPathOptions::Check() const {
           "max_step_deg must be in (0, 90]");
   Require(max_speed_deg_per_hour > 0 && max_speed_deg_per_hour <= 90,
           "max_speed_deg_per_hour must be in (0, 90]");
-  Require(min_explained >= 0 && min_explained < 1,
-          "min_explained must be in [0, 1)");
+  Require(min_significance >= 0, "min_significance must be >= 0");
   Require(min_margin >= 0 && std::isfinite(min_margin),
           "min_margin must be >= 0");
   Require(rival_exclusion_deg >= 0 && rival_exclusion_deg <= 90,
@@ -54,6 +53,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   out.measured.assign(T, 0);
   out.explained.assign(T, 0.f);
   out.margin.assign(T, 0.f);
+  out.significance.assign(T, 0.f);
   if (T == 0) {
     out.message = "no frames";
     return out;
@@ -65,7 +65,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     return scores[static_cast<size_t>(t) * D + d] / 10.0;
   };
   bool any = false;
-  for (int t = 0; t < T && !any; ++t) any = evidence.BestExplained(t) > 0.02;
+  for (int t = 0; t < T && !any; ++t) any = evidence.Significance(t) > 0.0;
   if (!any) {
     out.status = SunPathResult::Status::kNoEvidence;
     out.message = "no frame shows shadows the model can cast";
@@ -139,9 +139,10 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
         rival = std::min(rival, cost_of(t, k));
     }
     out.explained[t] = static_cast<float>(evidence.BestExplained(t));
+    out.significance[t] = static_cast<float>(evidence.Significance(t));
     out.margin[t] = static_cast<float>(rival - own);
-    out.measured[t] =
-        out.explained[t] >= o.min_explained && out.margin[t] >= o.min_margin;
+    out.measured[t] = out.significance[t] >= o.min_significance &&
+                      out.margin[t] >= o.min_margin;
   }
   out.status = SunPathResult::Status::kSuccess;
   return out;

@@ -88,7 +88,12 @@ struct SkyEvidenceOptions {
   double rival_exclusion_deg = 12.0;
   // Neighbouring samples are not independent (texture, blur, the model's
   // misfit): this many count as one observation in the costs.
-  double samples_per_observation = 20.0;
+  double samples_per_observation = 8.0;
+  // A frame has evidence when its best direction explains the frame this
+  // much better than no shadows at all (log-likelihood units). A thin
+  // gnomon's shadow on an engraved plate explains 1-2% of the variance and
+  // is still unmistakable, so the share alone cannot be the test.
+  double min_significance = 4.0;
 
   void Check() const;
 };
@@ -108,6 +113,9 @@ struct FrameEvidence {
   int best_direction = -1;
   double best_explained = 0.0;
   double margin = 0.0;
+  // How much better the best direction explains the frame than no shadows
+  // at all (log-likelihood units).
+  double significance = 0.0;
   // The median ratio of intensity to reference: the frame's exposure
   // relative to the reference frames.
   double exposure = 0.0;
@@ -148,6 +156,7 @@ class SkyEvidence {
   // to 0.1 and clipped at 25.5 (a frame never weighs more than that).
   std::vector<float> Cost(int k) const;
   double BestExplained(int k) const;
+  double Significance(int k) const;
   // All kept costs, frames x directions, in tenths.
   const std::vector<uint8_t>& scores() const;
 

@@ -33,10 +33,10 @@ struct SunPathOptions {
   // Apparent angular speed bound of the Sun (deg per hour) when times are
   // known, plus the grid's quantisation (1.5 spacings) as slack.
   double max_speed_deg_per_hour = 15.5;
-  // A frame counts as measured when its best direction explains at least
-  // this share of the frame's variance and the chosen one leads every
-  // direction rival_exclusion_deg away by min_margin (log-likelihood).
-  double min_explained = 0.05;
+  // A frame counts as measured when its evidence is significant (its best
+  // direction beats no shadows by this much) and the chosen direction leads
+  // every direction rival_exclusion_deg away by min_margin (log-likelihood).
+  double min_significance = 4.0;
   double min_margin = 2.0;
   double rival_exclusion_deg = 12.0;
 
@@ -61,6 +61,7 @@ struct SunPathResult {
   // (log-likelihood; negative when a far direction fits the frame better).
   std::vector<float> explained;
   std::vector<float> margin;
+  std::vector<float> significance;
   double cost = 0.0;
 };
 
