@@ -30,9 +30,11 @@ int main() {
       best = std::min(best, r.seconds);
     }
     const double err = testing::AngleDeg(r.sun_in_world, sun);
-    std::printf("initial_sun[%s]: 1920x1080 in %.3f s (%d pixels used), error %.2f deg\n",
-                method == InitialSunMethod::kDefault ? "default" : "thesis", best,
-                r.num_pixels, err);
+    std::printf(
+        "initial_sun[%s]: 1920x1080 in %.3f s (%d pixels used), error %.2f "
+        "deg\n",
+        method == InitialSunMethod::kDefault ? "default" : "thesis", best,
+        r.num_pixels, err);
   }
   return 0;
 }

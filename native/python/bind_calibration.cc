@@ -12,10 +12,12 @@ namespace sunlapse::python {
 void BindCalibration(py::module_& m) {
   m.def(
       "solve_camera",
-      [](const py::array& points, const py::array& pixels, int width, int height,
-         double focal_px) {
-        const double* w = CheckArray<double>(points, "points_in_world", {-1, 3});
-        const double* p = CheckArray<double>(pixels, "pixels", {points.shape(0), 2});
+      [](const py::array& points, const py::array& pixels, int width,
+         int height, double focal_px) {
+        const double* w =
+            CheckArray<double>(points, "points_in_world", {-1, 3});
+        const double* p =
+            CheckArray<double>(pixels, "pixels", {points.shape(0), 2});
         std::vector<Eigen::Vector3d> world;
         std::vector<Eigen::Vector2d> px;
         for (py::ssize_t i = 0; i < points.shape(0); ++i) {
@@ -35,11 +37,14 @@ void BindCalibration(py::module_& m) {
         d["errors_px"] = r.errors_px;
         return d;
       },
-      py::arg("points_in_world").noconvert(), py::arg("pixels").noconvert(), py::arg("width"),
-      py::arg("height"), py::arg("focal_px") = 0.0,
-      "Camera from marked points: world (N,3) float64, OpenCV pixels (N,2) float64. "
-      "focal_px <= 0 estimates the focal length (>= 6 coplanar points). Returns a dict "
-      "with success, message, focal_px, K, matrix_world (Blender camera), rms_px, errors_px.");
+      py::arg("points_in_world").noconvert(), py::arg("pixels").noconvert(),
+      py::arg("width"), py::arg("height"), py::arg("focal_px") = 0.0,
+      "Camera from marked points: world (N,3) float64, OpenCV pixels (N,2) "
+      "float64. "
+      "focal_px <= 0 estimates the focal length (>= 6 coplanar points). "
+      "Returns a dict "
+      "with success, message, focal_px, K, matrix_world (Blender camera), "
+      "rms_px, errors_px.");
 }
 
 }  // namespace sunlapse::python

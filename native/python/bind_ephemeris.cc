@@ -20,9 +20,9 @@ void BindEphemeris(py::module_& m) {
         o.temperature_c = temperature_c;
         o.relative_humidity = relative_humidity;
         o.dut1_s = dut1_s;
-        const SunPosition s = SunPositionAt(
-            {year, month, day, hour, minute, second}, latitude_deg,
-            longitude_deg, o);
+        const SunPosition s =
+            SunPositionAt({year, month, day, hour, minute, second},
+                          latitude_deg, longitude_deg, o);
         return py::make_tuple(s.zenith_deg, s.azimuth_deg);
       },
       py::arg("year"), py::arg("month"), py::arg("day"), py::arg("hour"),

@@ -37,7 +37,8 @@ ProgressCallback WrapProgress(const py::object& fn) {
 InitialSunMethod ParseMethod(const std::string& m) {
   if (m == "thesis") return InitialSunMethod::kThesis;
   if (m == "default") return InitialSunMethod::kDefault;
-  throw std::invalid_argument("method: expected 'thesis' or 'default', got '" + m + "'");
+  throw std::invalid_argument("method: expected 'thesis' or 'default', got '" +
+                              m + "'");
 }
 
 // A cv::Mat viewing (not copying) a checked numpy image: float32 (H,W), or
@@ -53,15 +54,14 @@ cv::Mat FloatView(const py::array& a, const char* name, bool colour = false) {
 // The same for a uint8 (H,W) mask.
 cv::Mat MaskView(const py::array& a, const char* name) {
   const uint8_t* data = CheckArray<uint8_t>(a, name, {-1, -1});
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_8UC1,
-                 const_cast<uint8_t*>(data));
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                 CV_8UC1, const_cast<uint8_t*>(data));
 }
 
 cv::Mat GrayArg(const py::object& frame) {
   if (frame.is_none()) return {};  // an undecodable frame
   return FloatView(frame.cast<py::array>(), "frame");
 }
-
 
 // initialize() and track() of a tracker class, with the GIL released.
 template <typename Tracker, typename Class>
@@ -83,48 +83,55 @@ void BindTrackerMethods(Class& cls) {
             return t.Track(img);
           },
           py::arg("frame"),
-          "Next frame (float32 (H,W) gray, or None if it could not be decoded).");
+          "Next frame (float32 (H,W) gray, or None if it could not be "
+          "decoded).");
 }
 
 }  // namespace
 
 void BindEstimate(py::module_& m) {
-  py::class_<ShadowTracker> shadow_tracker(m, "ShadowTracker",
-                            "Follows the Sun through a clip by the model's cast shadows "
-                            "on the ground (metric; see shadow_tracker.h).");
-  shadow_tracker.def(py::init([](const Scene& scene, const Camera& camera,
-                       std::vector<int32_t> ground_object_ids, int ignore_top_rows,
-                       int ignore_bottom_rows, int band_radius_px, int max_band_pixels,
-                       double min_contrast, int subsamples, bool normalize_albedo) {
-             ShadowTrackerOptions o;
-             o.ground_object_ids = std::move(ground_object_ids);
-             o.ignore_top_rows = ignore_top_rows;
-             o.ignore_bottom_rows = ignore_bottom_rows;
-             o.band_radius_px = band_radius_px;
-             o.max_band_pixels = max_band_pixels;
-             o.min_contrast = min_contrast;
-             o.subsamples = subsamples;
-             o.normalize_albedo = normalize_albedo;
-             return std::make_unique<ShadowTracker>(scene, camera, o);
-           }),
-           py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
-           py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
-           py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 800,
-           py::arg("min_contrast") = 0.5, py::arg("subsamples") = 2,
-           py::arg("normalize_albedo") = true,
-           py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  py::class_<ShadowTracker> shadow_tracker(
+      m, "ShadowTracker",
+      "Follows the Sun through a clip by the model's cast shadows "
+      "on the ground (metric; see shadow_tracker.h).");
+  shadow_tracker.def(
+      py::init([](const Scene& scene, const Camera& camera,
+                  std::vector<int32_t> ground_object_ids, int ignore_top_rows,
+                  int ignore_bottom_rows, int band_radius_px,
+                  int max_band_pixels, double min_contrast, int subsamples,
+                  bool normalize_albedo) {
+        ShadowTrackerOptions o;
+        o.ground_object_ids = std::move(ground_object_ids);
+        o.ignore_top_rows = ignore_top_rows;
+        o.ignore_bottom_rows = ignore_bottom_rows;
+        o.band_radius_px = band_radius_px;
+        o.max_band_pixels = max_band_pixels;
+        o.min_contrast = min_contrast;
+        o.subsamples = subsamples;
+        o.normalize_albedo = normalize_albedo;
+        return std::make_unique<ShadowTracker>(scene, camera, o);
+      }),
+      py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
+      py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
+      py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 800,
+      py::arg("min_contrast") = 0.5, py::arg("subsamples") = 2,
+      py::arg("normalize_albedo") = true, py::keep_alive<1, 2>(),
+      py::keep_alive<1, 3>());
   BindTrackerMethods<ShadowTracker>(shadow_tracker);
-  py::class_<ThesisTracker> thesis_tracker(m, "ThesisTracker",
-                            "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
-  thesis_tracker.def(py::init([](const Scene& scene, const Camera& camera,
-                       std::vector<int32_t> ground_object_ids, int ignore_top_rows) {
-             ThesisTrackerOptions o;
-             o.ground_object_ids = std::move(ground_object_ids);
-             o.ignore_top_rows = ignore_top_rows;
-             return std::make_unique<ThesisTracker>(scene, camera, o);
-           }),
-           py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
-           py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  py::class_<ThesisTracker> thesis_tracker(
+      m, "ThesisTracker",
+      "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
+  thesis_tracker.def(
+      py::init([](const Scene& scene, const Camera& camera,
+                  std::vector<int32_t> ground_object_ids, int ignore_top_rows) {
+        ThesisTrackerOptions o;
+        o.ground_object_ids = std::move(ground_object_ids);
+        o.ignore_top_rows = ignore_top_rows;
+        return std::make_unique<ThesisTracker>(scene, camera, o);
+      }),
+      py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
+      py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(),
+      py::keep_alive<1, 3>());
   BindTrackerMethods<ThesisTracker>(thesis_tracker);
   py::class_<TrackedFrame>(m, "TrackedFrame")
       .def_readonly("ok", &TrackedFrame::ok)
@@ -141,8 +148,9 @@ void BindEstimate(py::module_& m) {
       .def_readonly("shadow_end_px", &TrackedFrame::shadow_end_px)
       .def_readonly("seconds", &TrackedFrame::seconds);
 
-  py::class_<VideoReader>(m, "VideoReader",
-                          "Frames of a movie file or a numbered image sequence, streamed.")
+  py::class_<VideoReader>(
+      m, "VideoReader",
+      "Frames of a movie file or a numbered image sequence, streamed.")
       .def(py::init<const std::string&>(), py::arg("path"))
       .def_property_readonly("width", &VideoReader::width)
       .def_property_readonly("height", &VideoReader::height)
@@ -168,16 +176,19 @@ void BindEstimate(py::module_& m) {
 
   m.def(
       "detect_unmodelled_shadows",
-      [](const py::array& frame, const py::object& background, const py::array& ground,
-         const py::array& model_shadow, double dark_ratio, double max_chroma_ratio,
-         int model_margin_px, double min_area_fraction, double min_edge_contrast,
+      [](const py::array& frame, const py::object& background,
+         const py::array& ground, const py::array& model_shadow,
+         double dark_ratio, double max_chroma_ratio, int model_margin_px,
+         double min_area_fraction, double min_edge_contrast,
          int registration_px) {
         // float32 (H,W) gray or (H,W,3) linear BGR; masks uint8 (H,W).
         const cv::Mat f = FloatView(frame, "frame", true);
-        const cv::Mat b = background.is_none()
-                              ? cv::Mat()
-                              : FloatView(background.cast<py::array>(), "background", true);
-        const cv::Mat g = MaskView(ground, "ground"), s = MaskView(model_shadow, "model_shadow");
+        const cv::Mat b =
+            background.is_none()
+                ? cv::Mat()
+                : FloatView(background.cast<py::array>(), "background", true);
+        const cv::Mat g = MaskView(ground, "ground"),
+                      s = MaskView(model_shadow, "model_shadow");
         UnmodelledShadowOptions o;
         o.dark_ratio = dark_ratio;
         o.max_chroma_ratio = max_chroma_ratio;
@@ -196,8 +207,10 @@ void BindEstimate(py::module_& m) {
         for (const UnmodelledShadow& u : r.regions) {
           py::dict d;
           d["area_px"] = u.area_px;
-          d["box"] = py::make_tuple(u.box.x, u.box.y, u.box.width, u.box.height);
-          d["centroid_px"] = py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
+          d["box"] =
+              py::make_tuple(u.box.x, u.box.y, u.box.width, u.box.height);
+          d["centroid_px"] =
+              py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
           d["darkening"] = u.darkening;
           d["edge_contrast"] = u.edge_contrast;
           d["touches_model"] = u.touches_model;
@@ -213,9 +226,11 @@ void BindEstimate(py::module_& m) {
       py::arg("dark_ratio") = 0.7, py::arg("max_chroma_ratio") = 2.5,
       py::arg("model_margin_px") = 2, py::arg("min_area_fraction") = 2e-4,
       py::arg("min_edge_contrast") = 2.5, py::arg("registration_px") = 2,
-      "Hard ground shadows the model does not explain: {'mask': uint8 (H,W) 255 on "
+      "Hard ground shadows the model does not explain: {'mask': uint8 (H,W) "
+      "255 on "
       "them, 'regions': [{'area_px', 'box', 'centroid_px', 'darkening', "
-      "'edge_contrast', 'touches_model'}]}. frame/background float32 gray (H,W) or linear BGR (H,W,3), "
+      "'edge_contrast', 'touches_model'}]}. frame/background float32 gray "
+      "(H,W) or linear BGR (H,W,3), "
       "background None for the frame alone; "
       "ground/model_shadow uint8 (H,W) masks.");
 
@@ -223,7 +238,8 @@ void BindEstimate(py::module_& m) {
       "to_linear_gray",
       [](const py::array& bgr, double gamma) {
         CheckArray<uint8_t>(bgr, "image", {-1, -1, 3});
-        const cv::Mat in(static_cast<int>(bgr.shape(0)), static_cast<int>(bgr.shape(1)), CV_8UC3,
+        const cv::Mat in(static_cast<int>(bgr.shape(0)),
+                         static_cast<int>(bgr.shape(1)), CV_8UC3,
                          const_cast<void*>(bgr.data()));
         const cv::Mat g = ToLinearGray(in, gamma);
         py::array_t<float> out({g.rows, g.cols});
@@ -238,7 +254,8 @@ void BindEstimate(py::module_& m) {
       [](const Scene& scene, const Camera& camera, const py::array& frame,
          const std::string& method, int max_pixels, int ignore_top_rows,
          int ignore_bottom_rows, int num_candidates, double loss_scale,
-         bool per_object_albedo, int thesis_num_lights, const py::object& progress) {
+         bool per_object_albedo, int thesis_num_lights,
+         const py::object& progress) {
         const cv::Mat img = FloatView(frame, "frame");
         InitialSunOptions o;
         o.method = ParseMethod(method);

@@ -18,8 +18,10 @@ SensorFit ParseSensorFit(const std::string& s) {
   if (s == "AUTO") return SensorFit::kAuto;
   if (s == "HORIZONTAL") return SensorFit::kHorizontal;
   if (s == "VERTICAL") return SensorFit::kVertical;
-  throw std::invalid_argument("sensor_fit: expected AUTO, HORIZONTAL or "
-                              "VERTICAL, got '" + s + "'");
+  throw std::invalid_argument(
+      "sensor_fit: expected AUTO, HORIZONTAL or "
+      "VERTICAL, got '" +
+      s + "'");
 }
 
 // Allocates the numpy outputs of a first-hit query and the buffers into them.
@@ -86,16 +88,16 @@ void BindScene(py::module_& m) {
           },
           py::arg("lens_mm"), py::arg("sensor_width_mm"),
           py::arg("sensor_height_mm"), py::arg("sensor_fit") = "AUTO",
-          py::arg("shift_x") = 0.0, py::arg("shift_y") = 0.0,
-          py::arg("width"), py::arg("height"), py::arg("pixel_aspect_x") = 1.0,
+          py::arg("shift_x") = 0.0, py::arg("shift_y") = 0.0, py::arg("width"),
+          py::arg("height"), py::arg("pixel_aspect_x") = 1.0,
           py::arg("pixel_aspect_y") = 1.0, py::arg("matrix_world"),
           "Builds the camera from Blender's camera data, the image size in "
           "pixels and the camera object's matrix_world (4x4).")
       .def(
           "set_distortion",
           [](Camera& c, double focal_x_px, double focal_y_px,
-             double principal_x_px, double principal_y_px, double k1,
-             double k2, double k3) {
+             double principal_x_px, double principal_y_px, double k1, double k2,
+             double k3) {
             PolynomialDistortion d;
             d.focal_x_px = focal_x_px;
             d.focal_y_px = focal_y_px;
@@ -111,14 +113,15 @@ void BindScene(py::module_& m) {
           py::arg("k1") = 0.0, py::arg("k2") = 0.0, py::arg("k3") = 0.0,
           "Blender's polynomial lens distortion; principal point in OpenCV "
           "pixels.")
-      .def_property_readonly("has_distortion",
-                             [](const Camera& c) {
-                               return c.distortion().has_value();
-                             })
+      .def_property_readonly(
+          "has_distortion",
+          [](const Camera& c) { return c.distortion().has_value(); })
       .def_property_readonly("K", &Camera::K)
       .def_property_readonly(
           "cam_from_world",
-          [](const Camera& c) { return Eigen::Matrix4d(c.cam_from_world().matrix()); })
+          [](const Camera& c) {
+            return Eigen::Matrix4d(c.cam_from_world().matrix());
+          })
       .def_property_readonly("center_in_world", &Camera::center_in_world)
       .def_property_readonly("width", &Camera::width)
       .def_property_readonly("height", &Camera::height)
@@ -134,7 +137,8 @@ void BindScene(py::module_& m) {
             for (py::ssize_t i = 0; i < n; ++i) {
               Eigen::Vector2d px;
               front[i] = c.WorldToPixel(Eigen::Vector3d(p + 3 * i), &px);
-              if (!front[i]) px.setConstant(std::numeric_limits<double>::quiet_NaN());
+              if (!front[i])
+                px.setConstant(std::numeric_limits<double>::quiet_NaN());
               out[2 * i] = px.x();
               out[2 * i + 1] = px.y();
             }
@@ -167,8 +171,8 @@ void BindScene(py::module_& m) {
              const float* v = CheckArray<float>(vertices, "vertices", {-1, 3});
              const int32_t* t =
                  CheckArray<int32_t>(triangles, "triangles", {-1, 3});
-             const int32_t* ids = CheckArray<int32_t>(
-                 object_ids, "object_ids", {triangles.shape(0)});
+             const int32_t* ids = CheckArray<int32_t>(object_ids, "object_ids",
+                                                      {triangles.shape(0)});
              py::gil_scoped_release release;
              return Scene(v, vertices.shape(0), t, triangles.shape(0), ids);
            }),
@@ -218,7 +222,9 @@ void BindScene(py::module_& m) {
           },
           py::arg("camera"), py::arg("pixels").noconvert(),
           (std::string("First hits of the camera rays through pixels (N,2) "
-                       "float64. ") + kHitDoc).c_str())
+                       "float64. ") +
+           kHitDoc)
+              .c_str())
       .def(
           "occluded",
           [](const Scene& s, const py::array& origins,
