@@ -42,9 +42,19 @@ def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
     track = json.load(open(track_path))
     assert track["method"]["initial"] == method and track["method"]["tracking"] == method
     assert [f["frame"] for f in track["frames"]] == [1, 2, 3]
-    assert track["initial"] is not None or track["frames"][0]["reason"]
+    # The tiny plaza is sunny on every frame: both methods find an initial
+    # Sun and measure every frame (no frame without angles).
+    init = track["initial"]
+    assert init is not None and init["zenith_deg"] is not None, track.get("initial_tries")
+    # A sanity bound for both: the thesis's baseline is coarse at 128x96
+    # pixels (measured 21 deg off, ours 0.4), yet finds the Sun's side of the sky.
+    first = truth.frames[0]
+    assert evaluation.angle_between_deg(
+        evaluation.direction(init["zenith_deg"], init["azimuth_deg"] + track["north_offset_deg"]),
+        evaluation.direction(first.zenith_deg, first.azimuth_deg + truth.north_offset_deg)) < 30.0
     for f, t in zip(track["frames"], truth.frames):
-        assert f["zenith_deg"] is not None or f["reason"], f
+        assert f["raw_zenith_deg"] is not None and f["raw_azimuth_deg"] is not None, f
+        assert f.get("reason") is None and 0 <= f["zenith_deg"] <= 90, f
         if method == "default":
             # A sanity bound at 128x96 pixels; accuracy targets live in the report.
             est = evaluation.direction(f["zenith_deg"], f["azimuth_deg"] + track["north_offset_deg"])
