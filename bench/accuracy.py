@@ -39,7 +39,7 @@ def blender(*args, log=None):
 
 def last_error(log):
     try:
-        lines = [l.strip() for l in open(log) if "error" in l.lower()]
+        lines = [line.strip() for line in open(log) if "error" in line.lower()]
         return lines[-1] if lines else "see " + log
     except OSError:
         return "see " + log

@@ -3,7 +3,11 @@
     python3 tools/lint.py [--junit FILE] [CHECK ...]
 
 Each check prints the offending lines; the exit status is 1 when any check
-found something. Checks: clang-format (tracked C++ under native/ and bench/).
+found something. Checks:
+  clang-format  tracked C++ under native/ and bench/ (.clang-format)
+  flake8        the Python under addon/, examples/, bench/, tests/, tools/
+  mypy          the bpy-free packages addon/<package>/ (core, ...)
+Settings for flake8 and mypy live in setup.cfg.
 """
 
 import argparse
@@ -45,8 +49,30 @@ def check_clang_format():
     return run(["clang-format", "--dry-run", "--Werror", *files])
 
 
+PYTHON_DIRS = ("addon", "examples", "bench", "tests", "tools")
+
+
+def check_flake8():
+    return run([sys.executable, "-m", "flake8", "--show-source", *PYTHON_DIRS])
+
+
+def bpy_free_packages():
+    """Every package inside addon/ (Blender glue lives in addon/*.py only)."""
+    addon = os.path.join(ROOT, "addon")
+    return sorted(name for name in os.listdir(addon)
+                  if os.path.isfile(os.path.join(addon, name, "__init__.py")))
+
+
+def check_mypy():
+    packages = [arg for name in bpy_free_packages() for arg in ("-p", name)]
+    return run([sys.executable, "-m", "mypy", "--pretty", "--no-error-summary",
+                "--cache-dir", os.path.join(ROOT, "build", "mypy-cache"), *packages])
+
+
 CHECKS = {
     "clang-format": check_clang_format,
+    "flake8": check_flake8,
+    "mypy": check_mypy,
 }
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import List, Optional, Sequence
 
 from .trackfile import Track
 
@@ -73,12 +73,13 @@ def evaluate(name: str, track: Optional[Track], truth: Track,
     est_by_frame = {f.frame: f for f in track.frames}
     dz, da, dd = [], [], []
     for t in truth.frames:
-        if not t.has_estimate:
+        # Explicit None tests (not has_estimate) let mypy see the floats.
+        if t.zenith_deg is None or t.azimuth_deg is None:
             continue
         t_az = t.azimuth_deg + truth.north_offset_deg
         e = est_by_frame.get(t.frame)
         e_z = e_az = None
-        if e is not None and e.has_estimate:
+        if e is not None and e.zenith_deg is not None and e.azimuth_deg is not None:
             e_z, e_az = e.zenith_deg, e.azimuth_deg + track.north_offset_deg
             dz.append(abs(e_z - t.zenith_deg))
             da.append(azimuth_difference_deg(e_az, t_az))
@@ -92,9 +93,10 @@ def evaluate(name: str, track: Optional[Track], truth: Track,
         # The initial Sun's own frame (a run may anchor past frame 1).
         first = truth.frame(init["frame"]) if init.get("frame") is not None else None
         first = first if first is not None and first.has_estimate else truth.frames[0]
-        report.initial_error_deg = angle_between_deg(
-            direction(init["zenith_deg"], init["azimuth_deg"] + track.north_offset_deg),
-            direction(first.zenith_deg, first.azimuth_deg + truth.north_offset_deg))
+        if first.zenith_deg is not None and first.azimuth_deg is not None:
+            report.initial_error_deg = angle_between_deg(
+                direction(init["zenith_deg"], init["azimuth_deg"] + track.north_offset_deg),
+                direction(first.zenith_deg, first.azimuth_deg + truth.north_offset_deg))
     if report.frames_estimated == 0 and report.message is None:
         report.message = (track.extra.get("message") if track.extra else None) or \
             "the track has no estimates"

@@ -3,10 +3,8 @@ import json
 import os
 
 import bpy
-import numpy as np
 import pytest
 
-from conftest import ROOT
 from sunlapse.core import evaluation
 from test_addon import run_estimate
 
@@ -57,7 +55,8 @@ def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
         assert f.get("reason") is None and 0 <= f["zenith_deg"] <= 90, f
         if method == "default":
             # A sanity bound at 128x96 pixels; accuracy targets live in the report.
-            est = evaluation.direction(f["zenith_deg"], f["azimuth_deg"] + track["north_offset_deg"])
+            est = evaluation.direction(f["zenith_deg"],
+                                       f["azimuth_deg"] + track["north_offset_deg"])
             tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
             assert evaluation.angle_between_deg(est, tru) < 5.0
             assert f["shadow"]["end_px"] and f["confidence"] > 0
@@ -76,6 +75,7 @@ def test_a_wrong_start_is_found_again_from_scratch(tiny_plaza, tmp_path):
     track = json.load(open(track_path))
     assert track["reacquired_frames"] == [3]
     last, t = track["frames"][-1], truth.frames[-1]
-    est = evaluation.direction(last["raw_zenith_deg"], last["raw_azimuth_deg"] + track["north_offset_deg"])
+    est = evaluation.direction(last["raw_zenith_deg"],
+                               last["raw_azimuth_deg"] + track["north_offset_deg"])
     tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
     assert evaluation.angle_between_deg(est, tru) < 5.0

@@ -3,7 +3,6 @@ example .blend opens its clip from ../shared/real, the scripted run finds the
 Sun, and the confident frames follow the ephemeris. Skipped when the footage
 is not beside the work tree (a clone elsewhere)."""
 import os
-import subprocess
 import sys
 
 import bpy
@@ -33,7 +32,8 @@ def test_march_clip_follows_the_ephemeris(tmp_path, native):
     import real
     from sunlapse.core import evaluation, trackfile
     out = str(tmp_path / "mar.sun.json")
-    assert real.run_clip(BLEND, out, "default", out + ".log") == 0, open(out + ".log").read()[-2000:]
+    assert real.run_clip(BLEND, out, "default", out + ".log") == 0, \
+        open(out + ".log").read()[-2000:]
     track = trackfile.read_track(out)
     truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),
                              native.sun_position)
@@ -45,8 +45,8 @@ def test_march_clip_follows_the_ephemeris(tmp_path, native):
     # smoothed angles follow the ephemeris too (measured 0.5-3.5 deg zenith,
     # the dial's own bias, and 0.1-1.4 deg azimuth).
     unmeasured = [f for f in track.frames if f.raw_zenith_deg is None]
-    assert {f.frame for f in unmeasured} <= {1, 13, 15}, [(f.frame, f.reason)
-                                                         for f in unmeasured]
+    assert {f.frame for f in unmeasured} <= {1, 13, 15}, \
+        [(f.frame, f.reason) for f in unmeasured]
     for f in unmeasured:
         assert f.confidence == 0.0, (f.frame, f.confidence)
         t = truth.frame(f.frame)
@@ -69,7 +69,8 @@ def test_march_clip_physical_smoothing_meets_the_target(tmp_path, native):
     import real
     from sunlapse.core import evaluation, trackfile
     out = str(tmp_path / "mar.phys.sun.json")
-    assert real.run_clip(BLEND, out, "physical", out + ".log") == 0, open(out + ".log").read()[-2000:]
+    assert real.run_clip(BLEND, out, "physical", out + ".log") == 0, \
+        open(out + ".log").read()[-2000:]
     track = trackfile.read_track(out)
     assert track.method["smoothing"] == "physical"
     truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),
