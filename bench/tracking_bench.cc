@@ -32,10 +32,7 @@ int main() {
   const Scene scene = testing::BenchScene().Build();
   const Camera cam = testing::BenchCamera();
   auto sun = [](int f) {
-    const double z = (55 - 0.3 * f) * M_PI / 180,
-                 a = (120 + 0.5 * f) * M_PI / 180;
-    return Eigen::Vector3d(std::sin(z) * std::sin(a), std::sin(z) * std::cos(a),
-                           std::cos(z));
+    return SunInWorldFromAngles(55 - 0.3 * f, 120 + 0.5 * f);
   };
   testing::RenderOptions ro;
   ro.albedo = [](int id, const Eigen::Vector3f& p) {
@@ -71,7 +68,7 @@ int main() {
       total += r.seconds;
       worst_ms = std::max(worst_ms, 1000 * r.seconds);
       if (rep == 0) {  // the same every pass: the tracker is deterministic
-        const double err = testing::AngleDeg(r.sun_in_world, sun(f));
+        const double err = AngleBetweenDeg(r.sun_in_world, sun(f));
         worst_err = std::max(worst_err, err);
         sum_err += err;
         band = r.band_pixels;

@@ -2,6 +2,8 @@
 
 #include <erfa.h>
 
+#include "sunlapse/common/angles.h"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -78,17 +80,17 @@ SunPosition SunPositionAt(const UtcTime& utc, double latitude_deg,
   eraAtioq(eraAnp(ri), di, &astrom, &aob, &zob, &hob, &dob, &rob);
   SunPosition out;
   out.zenith_deg = zob / kDeg;
-  out.azimuth_deg = std::fmod(aob / kDeg + 360.0, 360.0);
+  out.azimuth_deg = WrapAzimuthDeg(aob / kDeg);
   return out;
 }
 
 void SunDirection(double zenith_deg, double azimuth_deg,
                   double north_offset_deg, double out_xyz[3]) {
-  const double z = zenith_deg * kDeg;
-  const double a = (azimuth_deg + north_offset_deg) * kDeg;
-  out_xyz[0] = std::sin(z) * std::sin(a);
-  out_xyz[1] = std::sin(z) * std::cos(a);
-  out_xyz[2] = std::cos(z);
+  const Eigen::Vector3d d = SunInWorldFromAngles(
+      zenith_deg, AzimuthWorldFromGeographic(azimuth_deg, north_offset_deg));
+  out_xyz[0] = d.x();
+  out_xyz[1] = d.y();
+  out_xyz[2] = d.z();
 }
 
 }  // namespace sunlapse

@@ -1,5 +1,6 @@
 #include "sunlapse/initial/initial_sun.h"
 
+#include "sunlapse/common/angles.h"
 #include "sunlapse/common/robust_fit.h"
 
 #include <ceres/ceres.h>
@@ -134,10 +135,6 @@ std::vector<Eigen::Vector3d> FibonacciHemisphere(int n, double max_zenith_deg) {
     out.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
   }
   return out;
-}
-
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) / kDeg;
 }
 
 struct Evaluated {
@@ -306,7 +303,7 @@ void EstimateDefault(const Scene& scene, const Samples& s,
   for (const auto& e : order) {
     bool far = true;
     for (const auto& st : starts)
-      far &= AngleDeg(st.dir, e.dir) > 2.5 * spacing_deg;
+      far &= AngleBetweenDeg(st.dir, e.dir) > 2.5 * spacing_deg;
     if (far) starts.push_back(e);
     if (static_cast<int>(starts.size()) >= o.num_refine_starts) break;
   }
@@ -322,7 +319,7 @@ void EstimateDefault(const Scene& scene, const Samples& s,
   double spread = 0;
   for (const auto& e : seen) {
     if (e.cost <= threshold)
-      spread = std::max(spread, AngleDeg(e.dir, best.dir));
+      spread = std::max(spread, AngleBetweenDeg(e.dir, best.dir));
   }
   cost(best.dir);  // leaves the shading of the best direction in `cost`
   FitIntensities(s, cost.shading(), out->loss_scale_abs, o, num_objects, out);
@@ -381,12 +378,10 @@ void EstimateThesis(const Scene& scene, const Samples& s,
   const double radius =
       std::max(1e-3, 0.5 * static_cast<double>(b.diagonal().norm()));
   const int K = o.thesis_num_lights;
-  const double e = o.thesis_light_elevation_deg * kDeg;
+  const double light_zenith_deg = 90.0 - o.thesis_light_elevation_deg;
   std::vector<Eigen::Vector3d> light_dir(K), light_pos(K);
   for (int k = 0; k < K; ++k) {
-    const double az = 2 * M_PI * k / K;
-    light_dir[k] = Eigen::Vector3d(std::cos(e) * std::sin(az),
-                                   std::cos(e) * std::cos(az), std::sin(e));
+    light_dir[k] = SunInWorldFromAngles(light_zenith_deg, 360.0 * k / K);
     light_pos[k] = center + radius * light_dir[k];
   }
   // Per pixel and light: max(0, L.N) if the light reaches the point.
@@ -474,19 +469,6 @@ void InitialSunOptions::Check() const {
           "max_zenith_deg must be in (0, 90]");
 }
 
-Eigen::Vector3d SunVector(double zenith_deg, double azimuth_deg) {
-  const double z = zenith_deg * kDeg, a = azimuth_deg * kDeg;
-  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
-}
-
-void SunAngles(const Eigen::Vector3d& toward_sun, double* zenith_deg,
-               double* azimuth_deg) {
-  const Eigen::Vector3d d = toward_sun.normalized();
-  *zenith_deg = std::acos(std::clamp(d.z(), -1.0, 1.0)) / kDeg;
-  const double a = std::atan2(d.x(), d.y()) / kDeg;
-  *azimuth_deg = a < 0 ? a + 360.0 : a;
-}
-
 InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
                                     const cv::Mat& frame,
                                     const InitialSunOptions& options,
@@ -529,7 +511,7 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
     } else {
       EstimateDefault(scene, s, options, progress, num_objects, &out);
     }
-    SunAngles(out.sun_in_world, &out.zenith_deg, &out.azimuth_deg);
+    AnglesFromSunInWorld(out.sun_in_world, &out.zenith_deg, &out.azimuth_deg);
     Report(progress, 1.0);
   } catch (const Cancelled&) {
     out = InitialSunResult();

@@ -10,7 +10,6 @@
 namespace sunlapse {
 namespace {
 
-using testing::AngleDeg;
 using testing::BoxAndPole;
 using testing::Mesh;
 
@@ -36,12 +35,13 @@ class InitialSunRecovers : public ::testing::TestWithParam<SunCase> {};
 TEST_P(InitialSunRecovers, KnownDirectionWithinHalfADegree) {
   const Scene scene = BoxAndPole().Build();
   const Camera cam = LookingDown(320, 240);
-  const Eigen::Vector3d sun = SunVector(GetParam().zenith, GetParam().azimuth);
+  const Eigen::Vector3d sun =
+      SunInWorldFromAngles(GetParam().zenith, GetParam().azimuth);
   const cv::Mat img = Render(scene, cam, sun, {0.35, 0.8, 0.15}, 0.01);
   InitialSunOptions o;
   const InitialSunResult r = EstimateInitialSun(scene, cam, img, o);
   ASSERT_TRUE(r.success) << r.message;
-  const double err = AngleDeg(r.sun_in_world, sun);
+  const double err = AngleBetweenDeg(r.sun_in_world, sun);
   EXPECT_LT(err, 0.5) << "zenith " << r.zenith_deg << " azimuth "
                       << r.azimuth_deg;
   EXPECT_GT(r.confidence, 0.3);
@@ -62,13 +62,13 @@ TEST(InitialSun, ObjectsMissingFromTheModelDoNotDragTheAnswer) {
   const Scene truth_scene = footage.Build();
   const Scene model = BoxAndPole().Build();
   const Camera cam = LookingDown(320, 240);
-  const Eigen::Vector3d sun = SunVector(50, 150);
+  const Eigen::Vector3d sun = SunInWorldFromAngles(50, 150);
   const cv::Mat img =
       Render(truth_scene, cam, sun, {0.35, 0.8, 0.15, 0.5}, 0.01);
   const InitialSunResult r =
       EstimateInitialSun(model, cam, img, InitialSunOptions());
   ASSERT_TRUE(r.success);
-  EXPECT_LT(AngleDeg(r.sun_in_world, sun), 1.0);
+  EXPECT_LT(AngleBetweenDeg(r.sun_in_world, sun), 1.0);
 }
 
 // An image made by exactly the thesis's model: one of its eight point lights
@@ -81,9 +81,8 @@ TEST(InitialSun, ThesisBaselineRecoversTheLightOfItsOwnModel) {
   const Eigen::Vector3d center = b.center().cast<double>();
   const double radius = 0.5 * b.diagonal().norm();
   const int k = 5;
-  const double az = 2 * M_PI * k / 8, el = M_PI / 4;
-  const Eigen::Vector3d dir(std::cos(el) * std::sin(az),
-                            std::cos(el) * std::cos(az), std::sin(el));
+  // The thesis's light k of 8, 45 deg above the horizon.
+  const Eigen::Vector3d dir = SunInWorldFromAngles(45, 360.0 * k / 8);
   const Eigen::Vector3d light = center + radius * dir;
   cv::Mat img(cam.height(), cam.width(), CV_32F, 0.6f);
   for (int y = 0; y < cam.height(); ++y) {
@@ -110,7 +109,7 @@ TEST(InitialSun, ThesisBaselineRecoversTheLightOfItsOwnModel) {
         << "light " << i;
   }
   EXPECT_NEAR(r.ambient_intensity, 0.1, 0.01);
-  EXPECT_LT(AngleDeg(r.sun_in_world, dir), 0.5);
+  EXPECT_LT(AngleBetweenDeg(r.sun_in_world, dir), 0.5);
 }
 
 TEST(InitialSun, FlatGroundWithoutShadowsSaysTheAzimuthIsUndetermined) {
@@ -118,7 +117,8 @@ TEST(InitialSun, FlatGroundWithoutShadowsSaysTheAzimuthIsUndetermined) {
   m.Ground(12, 0);
   const Scene scene = m.Build();
   const Camera cam = LookingDown(160, 120);
-  const cv::Mat img = Render(scene, cam, SunVector(40, 90), {0.4}, 0.01);
+  const cv::Mat img =
+      Render(scene, cam, SunInWorldFromAngles(40, 90), {0.4}, 0.01);
   const InitialSunResult r =
       EstimateInitialSun(scene, cam, img, InitialSunOptions());
   EXPECT_FALSE(r.message.empty());
@@ -129,7 +129,7 @@ TEST(InitialSun, CancelsWhenProgressSaysSo) {
   const Scene scene = BoxAndPole().Build();
   const Camera cam = LookingDown(160, 120);
   const cv::Mat img =
-      Render(scene, cam, SunVector(40, 200), {0.4, 0.4, 0.4}, 0.0);
+      Render(scene, cam, SunInWorldFromAngles(40, 200), {0.4, 0.4, 0.4}, 0.0);
   int calls = 0;
   const InitialSunResult r =
       EstimateInitialSun(scene, cam, img, InitialSunOptions(),
@@ -164,13 +164,6 @@ TEST(InitialSun, RejectsBadInput) {
                          cv::Mat(120, 160, CV_32F, 0.5f), InitialSunOptions());
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.message.find("too few"), std::string::npos);
-}
-
-TEST(InitialSun, AnglesRoundTrip) {
-  double z, a;
-  SunAngles(SunVector(33, 287), &z, &a);
-  EXPECT_NEAR(z, 33, 1e-9);
-  EXPECT_NEAR(a, 287, 1e-9);
 }
 
 }  // namespace

@@ -129,8 +129,4 @@ cv::Mat RenderLambertian(const Scene& scene, const Camera& cam,
   return img;
 }
 
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
-}
-
 }  // namespace sunlapse::testing

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "sunlapse/common/angles.h"
 #include "sunlapse/scene/camera.h"
 #include "sunlapse/scene/scene.h"
 
@@ -55,8 +56,5 @@ struct RenderOptions {
 cv::Mat RenderLambertian(const Scene& scene, const Camera& camera,
                          const Eigen::Vector3d& toward_sun,
                          const RenderOptions& options);
-
-// Angle between two directions, degrees.
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 
 }  // namespace sunlapse::testing

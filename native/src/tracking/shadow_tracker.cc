@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "casters.h"
+#include "sunlapse/common/angles.h"
 #include "sunlapse/common/robust_fit.h"
 
 namespace sunlapse {
@@ -28,12 +29,6 @@ constexpr double kMaxWalkSteps = 10;
 
 void Require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
-}
-
-void AnglesOf(const Eigen::Vector3d& d, double* zenith, double* azimuth) {
-  *zenith = std::acos(std::clamp(d.z(), -1.0, 1.0)) / kDeg;
-  const double a = std::atan2(d.x(), d.y()) / kDeg;
-  *azimuth = a < 0 ? a + 360.0 : a;
 }
 
 }  // namespace
@@ -511,7 +506,7 @@ struct ShadowTracker::Impl {
   }
 
   void Describe(const Eigen::Vector3d& d, TrackedFrame* out) {
-    AnglesOf(d, &out->zenith_deg, &out->azimuth_deg);
+    AnglesFromSunInWorld(d, &out->zenith_deg, &out->azimuth_deg);
     out->sun_in_world = d;
     // The longest modelled shadow whose tip lands on the ground in view.
     double longest = 0;
@@ -750,8 +745,7 @@ TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;
-  s.last_correction_deg =
-      std::atan2(found.cross(pred).norm(), found.dot(pred)) / kDeg;
+  s.last_correction_deg = AngleBetweenDeg(found, pred);
   s.sun = found;
   s.lost = 0;
   return finish(found);

@@ -11,11 +11,8 @@
 namespace sunlapse {
 namespace {
 
-using testing::AngleDeg;
-
 Eigen::Vector3d Sun(double zenith, double azimuth) {
-  const double z = zenith * M_PI / 180, a = azimuth * M_PI / 180;
-  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
+  return SunInWorldFromAngles(zenith, azimuth);
 }
 
 // A textured ground (fixed in the world) under noise, like real paving.
@@ -66,7 +63,7 @@ TEST(ShadowTracker, FollowsRotatingAndShorteningShadowsWithinHalfADegree) {
         fx.scene, fx.cam, PathAt(f, n), Textured(f + 1));
     const TrackedFrame r = tracker.Track(img);
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    const double error = AngleDeg(r.sun_in_world, PathAt(f, n));
+    const double error = AngleBetweenDeg(r.sun_in_world, PathAt(f, n));
     worst = std::max(worst, error);
     sum += error;
     EXPECT_GT(r.confidence, 0.3);
@@ -147,7 +144,7 @@ TEST(ShadowTracker, FollowsASunThatJumpsSeveralDegreesPerFrame) {
     const TrackedFrame r = tracker.Track(testing::RenderLambertian(
         fx.scene, fx.cam, PathAt(f, n), Textured(f + 1)));
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    worst = std::max(worst, AngleDeg(r.sun_in_world, PathAt(f, n)));
+    worst = std::max(worst, AngleBetweenDeg(r.sun_in_world, PathAt(f, n)));
   }
   std::printf("worst error with 3 deg steps: %.3f deg\n", worst);
   EXPECT_LT(worst, 0.5);
@@ -171,7 +168,7 @@ TEST(ShadowTracker, FollowsASunThatStandsStillThenJumps) {
     const TrackedFrame r = tracker.Track(
         testing::RenderLambertian(fx.scene, fx.cam, sun(f), Textured(f + 1)));
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    worst = std::max(worst, AngleDeg(r.sun_in_world, sun(f)));
+    worst = std::max(worst, AngleBetweenDeg(r.sun_in_world, sun(f)));
   }
   std::printf("worst error with still Sun and 3 deg jumps: %.3f deg\n", worst);
   EXPECT_LT(worst, 0.5);
@@ -209,7 +206,8 @@ TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
       continue;
     }
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    EXPECT_LT(AngleDeg(r.sun_in_world, PathAt(f, n)), 1.0) << "frame " << f;
+    EXPECT_LT(AngleBetweenDeg(r.sun_in_world, PathAt(f, n)), 1.0)
+        << "frame " << f;
   }
   EXPECT_EQ(lost, 2);
 }

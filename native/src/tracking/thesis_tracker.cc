@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "casters.h"
+#include "sunlapse/common/angles.h"
 
 namespace sunlapse {
 namespace {
@@ -234,8 +235,7 @@ TrackedFrame ThesisTracker::Initialize(const cv::Mat& frame,
   const auto t0 = std::chrono::steady_clock::now();
   TrackedFrame out;
   const Eigen::Vector3d d = sun.normalized();
-  t.zenith = std::acos(d.z()) / kDeg;
-  t.azimuth = WrapDeg(std::atan2(d.x(), d.y()) / kDeg);
+  AnglesFromSunInWorld(d, &t.zenith, &t.azimuth);
   out.sun_in_world = d;
   out.zenith_deg = t.zenith;
   out.azimuth_deg = t.azimuth;
@@ -304,9 +304,7 @@ TrackedFrame ThesisTracker::Track(const cv::Mat& frame) {
   out.zenith_deg = t.zenith;
   out.azimuth_deg = t.azimuth;
   auto finish = [&]() {
-    const double z = out.zenith_deg * kDeg, a = out.azimuth_deg * kDeg;
-    out.sun_in_world = {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a),
-                        std::cos(z)};
+    out.sun_in_world = SunInWorldFromAngles(out.zenith_deg, out.azimuth_deg);
     out.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
             .count();

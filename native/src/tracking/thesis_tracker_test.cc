@@ -94,12 +94,7 @@ TEST(ThesisTracker, FollowsAPoleShadowSeenFromAbove) {
   m.Box({-0.3f, -0.3f, 0}, {0.3f, 0.3f, 4.0f}, 1);
   const Scene scene = m.Build();
   const Camera cam = testing::LookAt({0, -0.01, 40}, {0, 0, 0}, 480, 480, 35);
-  auto sun = [](double z, double a) {
-    z *= M_PI / 180;
-    a *= M_PI / 180;
-    return Eigen::Vector3d(std::sin(z) * std::sin(a), std::sin(z) * std::cos(a),
-                           std::cos(z));
-  };
+  auto sun = [](double z, double a) { return SunInWorldFromAngles(z, a); };
   testing::RenderOptions ro;
   ro.noise = 0.005;
   ro.supersample = 2;

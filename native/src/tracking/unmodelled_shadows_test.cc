@@ -14,8 +14,7 @@ namespace sunlapse {
 namespace {
 
 Eigen::Vector3d Sun(double zenith, double azimuth) {
-  const double z = zenith * M_PI / 180, a = azimuth * M_PI / 180;
-  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
+  return SunInWorldFromAngles(zenith, azimuth);
 }
 
 testing::RenderOptions Paving(uint32_t seed) {
