@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 
 import evaluate  # noqa: E402
-from core import evaluation, trackfile  # noqa: E402
+from core import angles, evaluation, trackfile  # noqa: E402
 
 PRESETS = ["plaza", "southern_winter", "tropic_noon", "nordic_autumn", "indoor_window"]
 SIZES = {  # generator flags per size
@@ -39,7 +39,7 @@ def blender(*args, log=None):
 
 def last_error(log):
     try:
-        lines = [l.strip() for l in open(log) if "error" in l.lower()]
+        lines = [line.strip() for line in open(log) if "error" in line.lower()]
         return lines[-1] if lines else "see " + log
     except OSError:
         return "see " + log
@@ -137,7 +137,8 @@ def main(argv=None):
                 first = truth.frames[0]
                 # The user .blend knows no north: azimuths are world ones.
                 extra = ["--initial-sun", str(first.zenith_deg),
-                         str((first.azimuth_deg + truth.north_offset_deg) % 360)]
+                         str(angles.azimuth_world_from_geographic(first.azimuth_deg,
+                                                                  truth.north_offset_deg))]
             rc = blender(os.path.join(scene_dir, "scene.blend"), "--python-exit-code", "1",
                          "--python", os.path.join(ROOT, "examples", "run_estimate.py"), "--",
                          "--out", track, "--method", base, *extra, log=log)

@@ -14,7 +14,7 @@ int main() {
   // Ground, a box, three poles and a wall, seen at 1920x1080.
   const Scene scene = testing::BenchScene().Build();
   const Camera cam = testing::BenchCamera();
-  const Eigen::Vector3d sun = SunVector(45, 210);
+  const Eigen::Vector3d sun = SunInWorldFromAngles(45, 210);
   testing::RenderOptions ro;
   const double albedo[] = {0.35, 0.8, 0.15, 0.15, 0.6};
   ro.albedo = [&](int id, const Eigen::Vector3f&) { return albedo[id]; };
@@ -29,10 +29,12 @@ int main() {
       r = EstimateInitialSun(scene, cam, img, o);
       best = std::min(best, r.seconds);
     }
-    const double err = testing::AngleDeg(r.sun_in_world, sun);
-    std::printf("initial_sun[%s]: 1920x1080 in %.3f s (%d pixels used), error %.2f deg\n",
-                method == InitialSunMethod::kDefault ? "default" : "thesis", best,
-                r.num_pixels, err);
+    const double err = AngleBetweenDeg(r.sun_in_world, sun);
+    std::printf(
+        "initial_sun[%s]: 1920x1080 in %.3f s (%d pixels used), error %.2f "
+        "deg\n",
+        method == InitialSunMethod::kDefault ? "default" : "thesis", best,
+        r.num_pixels, err);
   }
   return 0;
 }

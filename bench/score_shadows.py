@@ -25,7 +25,7 @@ import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
 from sunlapse import acquire, bridge, pipeline  # noqa: E402
-from sunlapse.core import evaluation, trackfile  # noqa: E402
+from sunlapse.core import angles, trackfile  # noqa: E402
 
 
 def edges(mask):
@@ -85,7 +85,8 @@ def main(track_path, truth_path):
         est = track.frame(int(frame))
         if est is None or not est.has_estimate:
             continue
-        d = evaluation.direction(est.zenith_deg, est.azimuth_deg + track.north_offset_deg)
+        d = tuple(angles.sun_in_world_from_geographic(est.zenith_deg, est.azimuth_deg,
+                                                      track.north_offset_deg))
         f = bgr.get(int(frame))
         found = None if f is None else pipeline.detect_unmodelled_shadows(
             scene, cam, ground_ids, f, d, [bgr[s] for s in samples])

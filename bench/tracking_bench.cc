@@ -4,8 +4,8 @@
 //   build/bench/bench_tracking   (SUNLAPSE_BENCH_REPEATS=N: passes, default 7)
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -32,12 +32,12 @@ int main() {
   const Scene scene = testing::BenchScene().Build();
   const Camera cam = testing::BenchCamera();
   auto sun = [](int f) {
-    const double z = (55 - 0.3 * f) * M_PI / 180, a = (120 + 0.5 * f) * M_PI / 180;
-    return Eigen::Vector3d(std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z));
+    return SunInWorldFromAngles(55 - 0.3 * f, 120 + 0.5 * f);
   };
   testing::RenderOptions ro;
   ro.albedo = [](int id, const Eigen::Vector3f& p) {
-    return id == 0 ? 0.3 + 0.05 * std::sin(3 * p.x()) * std::cos(2 * p.y()) : 0.5;
+    return id == 0 ? 0.3 + 0.05 * std::sin(3 * p.x()) * std::cos(2 * p.y())
+                   : 0.5;
   };
   const int n = 40;
   std::vector<cv::Mat> frames;
@@ -68,7 +68,7 @@ int main() {
       total += r.seconds;
       worst_ms = std::max(worst_ms, 1000 * r.seconds);
       if (rep == 0) {  // the same every pass: the tracker is deterministic
-        const double err = testing::AngleDeg(r.sun_in_world, sun(f));
+        const double err = AngleBetweenDeg(r.sun_in_world, sun(f));
         worst_err = std::max(worst_err, err);
         sum_err += err;
         band = r.band_pixels;
@@ -83,14 +83,19 @@ int main() {
   std::sort(sorted.begin(), sorted.end());
   std::string passes;
   for (double ms : pass_ms) passes += " " + std::to_string(ms).substr(0, 4);
-  std::printf("tracking_init: %.3f s (ground map and albedo, once per clip)\n", init_s);
-  std::printf("tracking: 1920x1080, %.2f ms/frame (median of %d passes; pass means:%s), "
-              "%.2f ms worst frame, %d band pixels, error %.3f deg mean, %.3f max\n",
-              sorted[sorted.size() / 2], repeats, passes.c_str(), worst_ms, band,
-              sum_err / (n - 1), worst_err);
-  std::printf("tracking_cost: %.0f shadow rays, %.1f candidate Suns scored per frame\n",
-              rays / (n - 1), evals / (n - 1));
-  std::printf("tracking_memory: %ld kB resident after init, %+ld kB over %d frames\n", rss0,
-              rss_growth, n - 1);
+  std::printf("tracking_init: %.3f s (ground map and albedo, once per clip)\n",
+              init_s);
+  std::printf(
+      "tracking: 1920x1080, %.2f ms/frame (median of %d passes; pass "
+      "means:%s), "
+      "%.2f ms worst frame, %d band pixels, error %.3f deg mean, %.3f max\n",
+      sorted[sorted.size() / 2], repeats, passes.c_str(), worst_ms, band,
+      sum_err / (n - 1), worst_err);
+  std::printf(
+      "tracking_cost: %.0f shadow rays, %.1f candidate Suns scored per frame\n",
+      rays / (n - 1), evals / (n - 1));
+  std::printf(
+      "tracking_memory: %ld kB resident after init, %+ld kB over %d frames\n",
+      rss0, rss_growth, n - 1);
   return 0;
 }

@@ -13,6 +13,7 @@ packages=(
   liberfa-dev pybind11-dev libgtest-dev libgmock-dev
   python3-dev python3-numpy python3-pytest python3-matplotlib
   blender ffmpeg xvfb xauth
+  clang-format python3-flake8 mypy
 )
 
 missing=()

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sets everything up (tools/install.sh) and runs every test:
-#   GoogleTest (ctest), bpy-free Python tests, tests inside Blender (background)
-#   and in a Blender window under Xvfb.
+#   house-habit checks (tools/lint.py), GoogleTest (ctest), bpy-free Python
+#   tests, tests inside Blender (background) and in a Blender window under Xvfb.
 # Ends with one line "tests: N passed, N failed" summed over all runners.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -11,6 +11,8 @@ build_dir="${SUNLAPSE_BUILD_DIR:-$here/build}"
 reports="$build_dir/test-reports"
 rm -rf "$reports" && mkdir -p "$reports"
 status=0
+echo "== Lint"
+/usr/bin/python3 "$here/tools/lint.py" --junit "$reports/lint.xml" || status=1
 echo "== GoogleTest"
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)" \
   --output-junit "$reports/ctest.xml" || status=1

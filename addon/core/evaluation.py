@@ -7,11 +7,13 @@ to +Y) is scored correctly against a geographic truth.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
+from .angles import angle_between_deg, azimuth_world_from_geographic, sun_in_world_from_angles
 from .trackfile import Track
+
+__all__ = ["angle_between_deg", "azimuth_difference_deg", "direction", "evaluate"]
 
 
 def azimuth_difference_deg(a: float, b: float) -> float:
@@ -19,20 +21,10 @@ def azimuth_difference_deg(a: float, b: float) -> float:
     return abs((a - b + 180.0) % 360.0 - 180.0)
 
 
-def direction(zenith_deg: float, azimuth_world_deg: float):
-    z, a = math.radians(zenith_deg), math.radians(azimuth_world_deg)
-    return (math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z))
-
-
-def angle_between_deg(u, v) -> float:
-    """Angle between two 3-vectors, of any length. atan2(|u x v|, u.v) stays
-    exact for tiny angles, where acos of a dot of float32 vectors that are
-    not quite unit reads 0.01 deg between a vector and itself."""
-    cx = u[1] * v[2] - u[2] * v[1]
-    cy = u[2] * v[0] - u[0] * v[2]
-    cz = u[0] * v[1] - u[1] * v[0]
-    dot = sum(x * y for x, y in zip(u, v))
-    return math.degrees(math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot))
+def direction(zenith_deg: float, azimuth_world_deg: float) -> Tuple[float, float, float]:
+    """angles.sun_in_world_from_angles as a tuple (kept for its callers)."""
+    x, y, z = sun_in_world_from_angles(zenith_deg, azimuth_world_deg)
+    return float(x), float(y), float(z)
 
 
 @dataclass
@@ -73,18 +65,20 @@ def evaluate(name: str, track: Optional[Track], truth: Track,
     est_by_frame = {f.frame: f for f in track.frames}
     dz, da, dd = [], [], []
     for t in truth.frames:
-        if not t.has_estimate:
+        # Explicit None tests (not has_estimate) let mypy see the floats.
+        if t.zenith_deg is None or t.azimuth_deg is None:
             continue
-        t_az = t.azimuth_deg + truth.north_offset_deg
+        t_az = azimuth_world_from_geographic(t.azimuth_deg, truth.north_offset_deg)
         e = est_by_frame.get(t.frame)
         e_z = e_az = None
-        if e is not None and e.has_estimate:
-            e_z, e_az = e.zenith_deg, e.azimuth_deg + track.north_offset_deg
+        if e is not None and e.zenith_deg is not None and e.azimuth_deg is not None:
+            e_z = e.zenith_deg
+            e_az = azimuth_world_from_geographic(e.azimuth_deg, track.north_offset_deg)
             dz.append(abs(e_z - t.zenith_deg))
             da.append(azimuth_difference_deg(e_az, t_az))
-            dd.append(angle_between_deg(direction(e_z, e_az), direction(t.zenith_deg, t_az)))
-        report.series.append((t.frame, t.zenith_deg, t_az % 360.0, e_z,
-                              None if e_az is None else e_az % 360.0))
+            dd.append(angle_between_deg(sun_in_world_from_angles(e_z, e_az),
+                                        sun_in_world_from_angles(t.zenith_deg, t_az)))
+        report.series.append((t.frame, t.zenith_deg, t_az, e_z, e_az))
     report.frames_estimated = len(dz)
     report.zenith, report.azimuth, report.direction = Stats.of(dz), Stats.of(da), Stats.of(dd)
     init = track.initial or {}
@@ -92,9 +86,12 @@ def evaluate(name: str, track: Optional[Track], truth: Track,
         # The initial Sun's own frame (a run may anchor past frame 1).
         first = truth.frame(init["frame"]) if init.get("frame") is not None else None
         first = first if first is not None and first.has_estimate else truth.frames[0]
-        report.initial_error_deg = angle_between_deg(
-            direction(init["zenith_deg"], init["azimuth_deg"] + track.north_offset_deg),
-            direction(first.zenith_deg, first.azimuth_deg + truth.north_offset_deg))
+        if first.zenith_deg is not None and first.azimuth_deg is not None:
+            report.initial_error_deg = angle_between_deg(
+                sun_in_world_from_angles(init["zenith_deg"], azimuth_world_from_geographic(
+                    init["azimuth_deg"], track.north_offset_deg)),
+                sun_in_world_from_angles(first.zenith_deg, azimuth_world_from_geographic(
+                    first.azimuth_deg, truth.north_offset_deg)))
     if report.frames_estimated == 0 and report.message is None:
         report.message = (track.extra.get("message") if track.extra else None) or \
             "the track has no estimates"

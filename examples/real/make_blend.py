@@ -15,7 +15,6 @@ with a path relative to the .blend, so the .blend finds the footage in
 ../shared/real/ beside the project's work tree without a copy.
 """
 import json
-import math
 import os
 import sys
 
@@ -78,7 +77,8 @@ def main():
     scene = bpy.context.scene
     clip = bpy.data.movieclips.load(os.path.abspath(args.clip))
     scene.active_clip = clip
-    scene.frame_start, scene.frame_end = clip.frame_start, clip.frame_start + clip.frame_duration - 1
+    scene.frame_start = clip.frame_start
+    scene.frame_end = clip.frame_start + clip.frame_duration - 1
     scene.frame_set(clip.frame_start)
     with open(args.marks) as f:
         marks = json.load(f)["marks"]

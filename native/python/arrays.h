@@ -17,10 +17,22 @@ namespace py = pybind11;
 
 template <typename T>
 const char* DtypeName();
-template <> inline const char* DtypeName<float>() { return "float32"; }
-template <> inline const char* DtypeName<double>() { return "float64"; }
-template <> inline const char* DtypeName<int32_t>() { return "int32"; }
-template <> inline const char* DtypeName<uint8_t>() { return "uint8"; }
+template <>
+inline const char* DtypeName<float>() {
+  return "float32";
+}
+template <>
+inline const char* DtypeName<double>() {
+  return "float64";
+}
+template <>
+inline const char* DtypeName<int32_t>() {
+  return "int32";
+}
+template <>
+inline const char* DtypeName<uint8_t>() {
+  return "uint8";
+}
 
 // Returns a pointer into `a` after checking dtype T, C order and shape
 // (-1 in `shape` accepts any size on that axis).

@@ -5,25 +5,37 @@
 #include <pybind11/stl.h>
 
 #include "arrays.h"
+#include "options.h"
 #include "sunlapse/calibration/camera_solve.h"
 
 namespace sunlapse::python {
 
 void BindCalibration(py::module_& m) {
+  OptionsClass<CameraSolveOptions>(m, "CameraSolveOptions",
+                                   "Options of solve_camera.")
+      .field("focal_px", &CameraSolveOptions::focal_px,
+             "Focal length, pixels; <= 0 estimates it.")
+      .field("principal_x_px", &CameraSolveOptions::principal_x_px,
+             "Principal point x, OpenCV pixels; NaN: the image centre.")
+      .field("principal_y_px", &CameraSolveOptions::principal_y_px,
+             "Principal point y, OpenCV pixels; NaN: the image centre.");
   m.def(
       "solve_camera",
-      [](const py::array& points, const py::array& pixels, int width, int height,
-         double focal_px) {
-        const double* w = CheckArray<double>(points, "points_in_world", {-1, 3});
-        const double* p = CheckArray<double>(pixels, "pixels", {points.shape(0), 2});
+      [](const py::array& points, const py::array& pixels, int width,
+         int height, const py::object& focal_px, const py::object& options,
+         const py::kwargs& kwargs) {
+        const double* w =
+            CheckArray<double>(points, "points_in_world", {-1, 3});
+        const double* p =
+            CheckArray<double>(pixels, "pixels", {points.shape(0), 2});
         std::vector<Eigen::Vector3d> world;
         std::vector<Eigen::Vector2d> px;
         for (py::ssize_t i = 0; i < points.shape(0); ++i) {
           world.emplace_back(w[3 * i], w[3 * i + 1], w[3 * i + 2]);
           px.emplace_back(p[2 * i], p[2 * i + 1]);
         }
-        CameraSolveOptions o;
-        o.focal_px = focal_px;
+        CameraSolveOptions o = OptionsFrom<CameraSolveOptions>(options, kwargs);
+        if (!focal_px.is_none()) o.focal_px = focal_px.cast<double>();
         const CameraSolveResult r = SolveCamera(world, px, width, height, o);
         py::dict d;
         d["success"] = r.success;
@@ -35,11 +47,17 @@ void BindCalibration(py::module_& m) {
         d["errors_px"] = r.errors_px;
         return d;
       },
-      py::arg("points_in_world").noconvert(), py::arg("pixels").noconvert(), py::arg("width"),
-      py::arg("height"), py::arg("focal_px") = 0.0,
-      "Camera from marked points: world (N,3) float64, OpenCV pixels (N,2) float64. "
-      "focal_px <= 0 estimates the focal length (>= 6 coplanar points). Returns a dict "
-      "with success, message, focal_px, K, matrix_world (Blender camera), rms_px, errors_px.");
+      py::arg("points_in_world").noconvert(), py::arg("pixels").noconvert(),
+      py::arg("width"), py::arg("height"), py::arg("focal_px") = py::none(),
+      py::kw_only(), py::arg("options") = py::none(),
+      "Camera from marked points: world (N,3) float64, OpenCV pixels (N,2) "
+      "float64. "
+      "focal_px <= 0 or None estimates the focal length (>= 6 coplanar "
+      "points); options=CameraSolveOptions and/or its fields as keyword "
+      "arguments. "
+      "Returns a dict "
+      "with success, message, focal_px, K, matrix_world (Blender camera), "
+      "rms_px, errors_px.");
 }
 
 }  // namespace sunlapse::python

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "arrays.h"
+#include "options.h"
 #include "sunlapse/initial/initial_sun.h"
 #include "sunlapse/tracking/shadow_tracker.h"
 #include "sunlapse/tracking/thesis_tracker.h"
@@ -37,7 +38,113 @@ ProgressCallback WrapProgress(const py::object& fn) {
 InitialSunMethod ParseMethod(const std::string& m) {
   if (m == "thesis") return InitialSunMethod::kThesis;
   if (m == "default") return InitialSunMethod::kDefault;
-  throw std::invalid_argument("method: expected 'thesis' or 'default', got '" + m + "'");
+  throw std::invalid_argument("method: expected 'thesis' or 'default', got '" +
+                              m + "'");
+}
+
+std::string MethodName(InitialSunMethod m) {
+  return m == InitialSunMethod::kThesis ? "thesis" : "default";
+}
+
+void BindOptions(py::module_& m) {
+  OptionsClass<InitialSunOptions>(m, "InitialSunOptions",
+                                  "Options of estimate_initial_sun.")
+      .field_property(
+          "method",
+          [](const InitialSunOptions& o) { return MethodName(o.method); },
+          [](InitialSunOptions& o, const std::string& name) {
+            o.method = ParseMethod(name);
+          },
+          "'default' (ours) or 'thesis' (the baseline).")
+      .field("max_pixels", &InitialSunOptions::max_pixels,
+             "At most this many pixels are used (a regular grid).")
+      .field("ignore_top_rows", &InitialSunOptions::ignore_top_rows,
+             "Rows at the top that are not scene content (banners).")
+      .field("ignore_bottom_rows", &InitialSunOptions::ignore_bottom_rows,
+             "Rows at the bottom that are not scene content.")
+      .field("min_intensity", &InitialSunOptions::min_intensity,
+             "Pixels darker than this (linear, [0, 1]) are not used.")
+      .field("max_intensity", &InitialSunOptions::max_intensity,
+             "Pixels brighter than this (clipped) are not used.")
+      .field("thesis_num_lights", &InitialSunOptions::thesis_num_lights,
+             "Thesis method: lights on the hemisphere.")
+      .field("thesis_light_elevation_deg",
+             &InitialSunOptions::thesis_light_elevation_deg,
+             "Thesis method: the lights' elevation, degrees.")
+      .field("num_candidates", &InitialSunOptions::num_candidates,
+             "Candidate directions on the upper hemisphere (Fibonacci).")
+      .field("num_refine_starts", &InitialSunOptions::num_refine_starts,
+             "Best separated candidates refined continuously.")
+      .field("refine_tolerance_deg", &InitialSunOptions::refine_tolerance_deg,
+             "Refinement stops below this step, degrees.")
+      .field("loss_scale", &InitialSunOptions::loss_scale,
+             "Cauchy scale as a fraction of the used pixels' median.")
+      .field("per_object_albedo", &InitialSunOptions::per_object_albedo,
+             "One albedo per object (else one for the whole model).")
+      .field("max_zenith_deg", &InitialSunOptions::max_zenith_deg,
+             "Candidate Suns lie at most this far from the zenith, degrees.");
+
+  OptionsClass<ShadowTrackerOptions>(m, "ShadowTrackerOptions",
+                                     "Options of ShadowTracker.")
+      .field("ground_object_ids", &ShadowTrackerOptions::ground_object_ids,
+             "Object ids of the ground the shadows fall on (at least one).")
+      .field("band_radius_px", &ShadowTrackerOptions::band_radius_px,
+             "Half-width of the band around predicted shadow boundaries, px.")
+      .field("max_band_pixels", &ShadowTrackerOptions::max_band_pixels,
+             "At most this many band pixels per frame.")
+      .field("search_step_deg", &ShadowTrackerOptions::search_step_deg,
+             "Largest first search step around the predicted Sun, degrees.")
+      .field("tolerance_deg", &ShadowTrackerOptions::tolerance_deg,
+             "Final search step, degrees.")
+      .field("loss_scale", &ShadowTrackerOptions::loss_scale,
+             "Cauchy scale as a fraction of the band's median intensity.")
+      .field("min_contrast", &ShadowTrackerOptions::min_contrast,
+             "Shadow lost below this fitted sun/ambient contrast.")
+      .field("subsamples", &ShadowTrackerOptions::subsamples,
+             "Rays per band pixel along each axis.")
+      .field("ignore_top_rows", &ShadowTrackerOptions::ignore_top_rows,
+             "Rows at the top that are not scene content.")
+      .field("ignore_bottom_rows", &ShadowTrackerOptions::ignore_bottom_rows,
+             "Rows at the bottom that are not scene content.")
+      .field("normalize_albedo", &ShadowTrackerOptions::normalize_albedo,
+             "Per-pixel ground albedo from the first frame.");
+
+  OptionsClass<ThesisTrackerOptions>(m, "ThesisTrackerOptions",
+                                     "Options of ThesisTracker.")
+      .field("ground_object_ids", &ThesisTrackerOptions::ground_object_ids,
+             "Object ids of the ground the shadows fall on (at least one).")
+      .field("max_direction_error_deg",
+             &ThesisTrackerOptions::max_direction_error_deg,
+             "Criterion 1: shadows further than this from the Sun's "
+             "direction go, degrees.")
+      .field("slope_start", &ThesisTrackerOptions::slope_start,
+             "Algorithm 1: pixels whose direction starts the walk.")
+      .field("slope_window", &ThesisTrackerOptions::slope_window,
+             "Algorithm 1: last pixels compared with the start.")
+      .field("max_slope_change_deg",
+             &ThesisTrackerOptions::max_slope_change_deg,
+             "Algorithm 1: the walk stops past this change, degrees.")
+      .field("max_length_px", &ThesisTrackerOptions::max_length_px,
+             "Hard stop for a walk, pixels.")
+      .field("ignore_top_rows", &ThesisTrackerOptions::ignore_top_rows,
+             "Rows at the top that are not scene content.");
+
+  OptionsClass<UnmodelledShadowOptions>(m, "UnmodelledShadowOptions",
+                                        "Options of detect_unmodelled_shadows.")
+      .field("dark_ratio", &UnmodelledShadowOptions::dark_ratio,
+             "Dark: frame / background below this share of the lit level.")
+      .field("max_chroma_ratio", &UnmodelledShadowOptions::max_chroma_ratio,
+             "Largest / smallest channel ratio at most this (colour input).")
+      .field("level_window", &UnmodelledShadowOptions::level_window,
+             "Lit level over windows of this share of the width.")
+      .field("model_margin_px", &UnmodelledShadowOptions::model_margin_px,
+             "The model's predicted shadow is widened by this many pixels.")
+      .field("min_area_fraction", &UnmodelledShadowOptions::min_area_fraction,
+             "Regions smaller than this share of the ground go.")
+      .field("min_edge_contrast", &UnmodelledShadowOptions::min_edge_contrast,
+             "Hard edge: rim energy at least this times the ground's median.")
+      .field("registration_px", &UnmodelledShadowOptions::registration_px,
+             "Compared with the darkest background within this many pixels.");
 }
 
 // A cv::Mat viewing (not copying) a checked numpy image: float32 (H,W), or
@@ -53,15 +160,14 @@ cv::Mat FloatView(const py::array& a, const char* name, bool colour = false) {
 // The same for a uint8 (H,W) mask.
 cv::Mat MaskView(const py::array& a, const char* name) {
   const uint8_t* data = CheckArray<uint8_t>(a, name, {-1, -1});
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)), CV_8UC1,
-                 const_cast<uint8_t*>(data));
+  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                 CV_8UC1, const_cast<uint8_t*>(data));
 }
 
 cv::Mat GrayArg(const py::object& frame) {
   if (frame.is_none()) return {};  // an undecodable frame
   return FloatView(frame.cast<py::array>(), "frame");
 }
-
 
 // initialize() and track() of a tracker class, with the GIL released.
 template <typename Tracker, typename Class>
@@ -83,58 +189,70 @@ void BindTrackerMethods(Class& cls) {
             return t.Track(img);
           },
           py::arg("frame"),
-          "Next frame (float32 (H,W) gray, or None if it could not be decoded).");
+          "Next frame (float32 (H,W) gray, or None if it could not be "
+          "decoded).");
 }
 
 }  // namespace
 
 void BindEstimate(py::module_& m) {
-  py::class_<ShadowTracker> shadow_tracker(m, "ShadowTracker",
-                            "Follows the Sun through a clip by the model's cast shadows "
-                            "on the ground (metric; see shadow_tracker.h).");
-  shadow_tracker.def(py::init([](const Scene& scene, const Camera& camera,
-                       std::vector<int32_t> ground_object_ids, int ignore_top_rows,
-                       int ignore_bottom_rows, int band_radius_px, int max_band_pixels,
-                       double min_contrast, int subsamples, bool normalize_albedo) {
-             ShadowTrackerOptions o;
-             o.ground_object_ids = std::move(ground_object_ids);
-             o.ignore_top_rows = ignore_top_rows;
-             o.ignore_bottom_rows = ignore_bottom_rows;
-             o.band_radius_px = band_radius_px;
-             o.max_band_pixels = max_band_pixels;
-             o.min_contrast = min_contrast;
-             o.subsamples = subsamples;
-             o.normalize_albedo = normalize_albedo;
-             return std::make_unique<ShadowTracker>(scene, camera, o);
-           }),
-           py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
-           py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
-           py::arg("band_radius_px") = 4, py::arg("max_band_pixels") = 800,
-           py::arg("min_contrast") = 0.5, py::arg("subsamples") = 2,
-           py::arg("normalize_albedo") = true,
-           py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  BindOptions(m);
+  py::class_<ShadowTracker> shadow_tracker(
+      m, "ShadowTracker",
+      "Follows the Sun through a clip by the model's cast shadows "
+      "on the ground (metric; see shadow_tracker.h).");
+  shadow_tracker.def(
+      py::init([](const Scene& scene, const Camera& camera,
+                  const py::object& ground_object_ids,
+                  const py::object& options, const py::kwargs& kwargs) {
+        ShadowTrackerOptions o =
+            OptionsFrom<ShadowTrackerOptions>(options, py::kwargs());
+        if (!ground_object_ids.is_none()) {
+          o.ground_object_ids = ground_object_ids.cast<std::vector<int32_t>>();
+        }
+        return std::make_unique<ShadowTracker>(scene, camera,
+                                               OptionsFrom(o, kwargs));
+      }),
+      py::arg("scene"), py::arg("camera"),
+      py::arg("ground_object_ids") = py::none(), py::kw_only(),
+      py::arg("options") = py::none(), py::keep_alive<1, 2>(),
+      py::keep_alive<1, 3>(),
+      "ShadowTracker(scene, camera, ground_object_ids, options=None, "
+      "**fields of ShadowTrackerOptions).");
   BindTrackerMethods<ShadowTracker>(shadow_tracker);
   shadow_tracker.def(
       "track_toward",
-      [](ShadowTracker& t, const py::object& frame, const Eigen::Vector3d& predicted) {
+      [](ShadowTracker& t, const py::object& frame,
+         const Eigen::Vector3d& predicted) {
         const cv::Mat img = GrayArg(frame);
         py::gil_scoped_release release;
         return t.Track(img, predicted);
       },
       py::arg("frame"), py::arg("predicted_sun_in_world"),
-      "Next frame, searched around the given Sun (the whole-clip path's) instead of the "
+      "Next frame, searched around the given Sun (the whole-clip path's) "
+      "instead of the "
       "tracker's own prediction.");
-  py::class_<ThesisTracker> thesis_tracker(m, "ThesisTracker",
-                            "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
-  thesis_tracker.def(py::init([](const Scene& scene, const Camera& camera,
-                       std::vector<int32_t> ground_object_ids, int ignore_top_rows) {
-             ThesisTrackerOptions o;
-             o.ground_object_ids = std::move(ground_object_ids);
-             o.ignore_top_rows = ignore_top_rows;
-             return std::make_unique<ThesisTracker>(scene, camera, o);
-           }),
-           py::arg("scene"), py::arg("camera"), py::arg("ground_object_ids"),
-           py::arg("ignore_top_rows") = 0, py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+  py::class_<ThesisTracker> thesis_tracker(
+      m, "ThesisTracker",
+      "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
+  thesis_tracker.def(
+      py::init([](const Scene& scene, const Camera& camera,
+                  const py::object& ground_object_ids,
+                  const py::object& options, const py::kwargs& kwargs) {
+        ThesisTrackerOptions o =
+            OptionsFrom<ThesisTrackerOptions>(options, py::kwargs());
+        if (!ground_object_ids.is_none()) {
+          o.ground_object_ids = ground_object_ids.cast<std::vector<int32_t>>();
+        }
+        return std::make_unique<ThesisTracker>(scene, camera,
+                                               OptionsFrom(o, kwargs));
+      }),
+      py::arg("scene"), py::arg("camera"),
+      py::arg("ground_object_ids") = py::none(), py::kw_only(),
+      py::arg("options") = py::none(), py::keep_alive<1, 2>(),
+      py::keep_alive<1, 3>(),
+      "ThesisTracker(scene, camera, ground_object_ids, options=None, "
+      "**fields of ThesisTrackerOptions).");
   BindTrackerMethods<ThesisTracker>(thesis_tracker);
   py::class_<TrackedFrame>(m, "TrackedFrame")
       .def_readonly("ok", &TrackedFrame::ok)
@@ -151,8 +269,9 @@ void BindEstimate(py::module_& m) {
       .def_readonly("shadow_end_px", &TrackedFrame::shadow_end_px)
       .def_readonly("seconds", &TrackedFrame::seconds);
 
-  py::class_<VideoReader>(m, "VideoReader",
-                          "Frames of a movie file or a numbered image sequence, streamed.")
+  py::class_<VideoReader>(
+      m, "VideoReader",
+      "Frames of a movie file or a numbered image sequence, streamed.")
       .def(py::init<const std::string&>(), py::arg("path"))
       .def_property_readonly("width", &VideoReader::width)
       .def_property_readonly("height", &VideoReader::height)
@@ -178,23 +297,19 @@ void BindEstimate(py::module_& m) {
 
   m.def(
       "detect_unmodelled_shadows",
-      [](const py::array& frame, const py::object& background, const py::array& ground,
-         const py::array& model_shadow, double dark_ratio, double max_chroma_ratio,
-         int model_margin_px, double min_area_fraction, double min_edge_contrast,
-         int registration_px) {
+      [](const py::array& frame, const py::object& background,
+         const py::array& ground, const py::array& model_shadow,
+         const py::object& options, const py::kwargs& kwargs) {
         // float32 (H,W) gray or (H,W,3) linear BGR; masks uint8 (H,W).
         const cv::Mat f = FloatView(frame, "frame", true);
-        const cv::Mat b = background.is_none()
-                              ? cv::Mat()
-                              : FloatView(background.cast<py::array>(), "background", true);
-        const cv::Mat g = MaskView(ground, "ground"), s = MaskView(model_shadow, "model_shadow");
-        UnmodelledShadowOptions o;
-        o.dark_ratio = dark_ratio;
-        o.max_chroma_ratio = max_chroma_ratio;
-        o.model_margin_px = model_margin_px;
-        o.min_area_fraction = min_area_fraction;
-        o.min_edge_contrast = min_edge_contrast;
-        o.registration_px = registration_px;
+        const cv::Mat b =
+            background.is_none()
+                ? cv::Mat()
+                : FloatView(background.cast<py::array>(), "background", true);
+        const cv::Mat g = MaskView(ground, "ground"),
+                      s = MaskView(model_shadow, "model_shadow");
+        const UnmodelledShadowOptions o =
+            OptionsFrom<UnmodelledShadowOptions>(options, kwargs);
         UnmodelledShadows r;
         {
           py::gil_scoped_release release;
@@ -206,8 +321,10 @@ void BindEstimate(py::module_& m) {
         for (const UnmodelledShadow& u : r.regions) {
           py::dict d;
           d["area_px"] = u.area_px;
-          d["box"] = py::make_tuple(u.box.x, u.box.y, u.box.width, u.box.height);
-          d["centroid_px"] = py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
+          d["box"] =
+              py::make_tuple(u.box.x, u.box.y, u.box.width, u.box.height);
+          d["centroid_px"] =
+              py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
           d["darkening"] = u.darkening;
           d["edge_contrast"] = u.edge_contrast;
           d["touches_model"] = u.touches_model;
@@ -220,12 +337,14 @@ void BindEstimate(py::module_& m) {
       },
       py::arg("frame").noconvert(), py::arg("background"),
       py::arg("ground").noconvert(), py::arg("model_shadow").noconvert(),
-      py::arg("dark_ratio") = 0.7, py::arg("max_chroma_ratio") = 2.5,
-      py::arg("model_margin_px") = 2, py::arg("min_area_fraction") = 2e-4,
-      py::arg("min_edge_contrast") = 2.5, py::arg("registration_px") = 2,
-      "Hard ground shadows the model does not explain: {'mask': uint8 (H,W) 255 on "
+      py::kw_only(), py::arg("options") = py::none(),
+      "Options: options=UnmodelledShadowOptions and/or its fields as keyword "
+      "arguments. Hard ground shadows the model does not explain: {'mask': "
+      "uint8 (H,W) "
+      "255 on "
       "them, 'regions': [{'area_px', 'box', 'centroid_px', 'darkening', "
-      "'edge_contrast', 'touches_model'}]}. frame/background float32 gray (H,W) or linear BGR (H,W,3), "
+      "'edge_contrast', 'touches_model'}]}. frame/background float32 gray "
+      "(H,W) or linear BGR (H,W,3), "
       "background None for the frame alone; "
       "ground/model_shadow uint8 (H,W) masks.");
 
@@ -233,7 +352,8 @@ void BindEstimate(py::module_& m) {
       "to_linear_gray",
       [](const py::array& bgr, double gamma) {
         CheckArray<uint8_t>(bgr, "image", {-1, -1, 3});
-        const cv::Mat in(static_cast<int>(bgr.shape(0)), static_cast<int>(bgr.shape(1)), CV_8UC3,
+        const cv::Mat in(static_cast<int>(bgr.shape(0)),
+                         static_cast<int>(bgr.shape(1)), CV_8UC3,
                          const_cast<void*>(bgr.data()));
         const cv::Mat g = ToLinearGray(in, gamma);
         py::array_t<float> out({g.rows, g.cols});
@@ -246,19 +366,11 @@ void BindEstimate(py::module_& m) {
   m.def(
       "estimate_initial_sun",
       [](const Scene& scene, const Camera& camera, const py::array& frame,
-         const std::string& method, int max_pixels, int ignore_top_rows,
-         int ignore_bottom_rows, int num_candidates, double loss_scale,
-         bool per_object_albedo, int thesis_num_lights, const py::object& progress) {
+         const py::object& progress, const py::object& options,
+         const py::kwargs& kwargs) {
         const cv::Mat img = FloatView(frame, "frame");
-        InitialSunOptions o;
-        o.method = ParseMethod(method);
-        o.max_pixels = max_pixels;
-        o.ignore_top_rows = ignore_top_rows;
-        o.ignore_bottom_rows = ignore_bottom_rows;
-        o.num_candidates = num_candidates;
-        o.loss_scale = loss_scale;
-        o.per_object_albedo = per_object_albedo;
-        o.thesis_num_lights = thesis_num_lights;
+        const InitialSunOptions o =
+            OptionsFrom<InitialSunOptions>(options, kwargs);
         const ProgressCallback cb = WrapProgress(progress);
         InitialSunResult r;
         {
@@ -285,12 +397,11 @@ void BindEstimate(py::module_& m) {
         return d;
       },
       py::arg("scene"), py::arg("camera"), py::arg("frame").noconvert(),
-      py::arg("method") = "default", py::arg("max_pixels") = 12000,
-      py::arg("ignore_top_rows") = 0, py::arg("ignore_bottom_rows") = 0,
-      py::arg("num_candidates") = 300, py::arg("loss_scale") = 0.35,
-      py::arg("per_object_albedo") = true, py::arg("thesis_num_lights") = 8,
-      py::arg("progress") = py::none(),
-      "Sun direction on one frame (float32 (H,W) linear gray, the camera's "
+      py::kw_only(), py::arg("progress") = py::none(),
+      py::arg("options") = py::none(),
+      "Options: options=InitialSunOptions and/or its fields as keyword "
+      "arguments (method='default' or 'thesis', ...). Sun direction on one "
+      "frame (float32 (H,W) linear gray, the camera's "
       "size). Azimuth is in the world frame (clockwise from +Y). Returns a "
       "dict; success False with a message when the frame cannot fix the Sun "
       "or the run was cancelled (progress returned False).");

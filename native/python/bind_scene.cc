@@ -8,6 +8,7 @@
 #include <string>
 
 #include "arrays.h"
+#include "options.h"
 #include "sunlapse/scene/camera.h"
 #include "sunlapse/scene/scene.h"
 
@@ -18,8 +19,34 @@ SensorFit ParseSensorFit(const std::string& s) {
   if (s == "AUTO") return SensorFit::kAuto;
   if (s == "HORIZONTAL") return SensorFit::kHorizontal;
   if (s == "VERTICAL") return SensorFit::kVertical;
-  throw std::invalid_argument("sensor_fit: expected AUTO, HORIZONTAL or "
-                              "VERTICAL, got '" + s + "'");
+  throw std::invalid_argument(
+      "sensor_fit: expected AUTO, HORIZONTAL or "
+      "VERTICAL, got '" +
+      s + "'");
+}
+
+const char* SensorFitName(SensorFit f) {
+  switch (f) {
+    case SensorFit::kHorizontal:
+      return "HORIZONTAL";
+    case SensorFit::kVertical:
+      return "VERTICAL";
+    default:
+      return "AUTO";
+  }
+}
+
+// Fields without a sensible default (a camera made without them would be
+// silently wrong): required unless a whole params struct is given.
+void RequireKeywords(const py::kwargs& kwargs,
+                     std::initializer_list<const char*> names,
+                     const char* function) {
+  for (const char* name : names) {
+    if (!kwargs.contains(name)) {
+      throw py::type_error(std::string(function) +
+                           ": missing required argument '" + name + "'");
+    }
+  }
 }
 
 // Allocates the numpy outputs of a first-hit query and the buffers into them.
@@ -61,64 +88,99 @@ constexpr const char* kHitDoc =
 }  // namespace
 
 void BindScene(py::module_& m) {
+  OptionsClass<BlenderCameraParams>(
+      m, "BlenderCameraParams",
+      "A camera as Blender describes it (Camera data, render settings).")
+      .field("lens_mm", &BlenderCameraParams::lens_mm,
+             "Focal length, millimetres (Camera.lens).")
+      .field("sensor_width_mm", &BlenderCameraParams::sensor_width_mm,
+             "Camera.sensor_width, millimetres.")
+      .field("sensor_height_mm", &BlenderCameraParams::sensor_height_mm,
+             "Camera.sensor_height, millimetres.")
+      .field_property(
+          "sensor_fit",
+          [](const BlenderCameraParams& p) {
+            return std::string(SensorFitName(p.sensor_fit));
+          },
+          [](BlenderCameraParams& p, const std::string& name) {
+            p.sensor_fit = ParseSensorFit(name);
+          },
+          "Camera.sensor_fit: 'AUTO', 'HORIZONTAL' or 'VERTICAL'.")
+      .field("shift_x", &BlenderCameraParams::shift_x,
+             "Camera.shift_x, in units of the fitted sensor side.")
+      .field("shift_y", &BlenderCameraParams::shift_y, "Camera.shift_y.")
+      .field("width", &BlenderCameraParams::width, "Image width, pixels.")
+      .field("height", &BlenderCameraParams::height, "Image height, pixels.")
+      .field("pixel_aspect_x", &BlenderCameraParams::pixel_aspect_x,
+             "Render pixel aspect x.")
+      .field("pixel_aspect_y", &BlenderCameraParams::pixel_aspect_y,
+             "Render pixel aspect y.")
+      .field("matrix_world", &BlenderCameraParams::world_from_camera_local,
+             "The camera object's matrix_world (4x4, world from camera "
+             "local).");
+  OptionsClass<PolynomialDistortion>(
+      m, "PolynomialDistortion",
+      "Blender's polynomial lens distortion (OpenCV pixels).")
+      .field("focal_x_px", &PolynomialDistortion::focal_x_px,
+             "Focal length, pixels.")
+      .field("focal_y_px", &PolynomialDistortion::focal_y_px,
+             "Vertical focal length (focal * pixel aspect), pixels.")
+      .field("principal_x_px", &PolynomialDistortion::principal_x_px,
+             "Principal point x, OpenCV pixels.")
+      .field("principal_y_px", &PolynomialDistortion::principal_y_px,
+             "Principal point y, OpenCV pixels.")
+      .field("k1", &PolynomialDistortion::k1, "r^2 coefficient.")
+      .field("k2", &PolynomialDistortion::k2, "r^4 coefficient.")
+      .field("k3", &PolynomialDistortion::k3, "r^6 coefficient.");
+
   py::class_<Camera>(m, "Camera",
                      "Pinhole camera in OpenCV pixels (0,0 = centre of the "
                      "top-left pixel), world frame = Blender's.")
       .def_static(
           "from_blender",
-          [](double lens_mm, double sensor_width_mm, double sensor_height_mm,
-             const std::string& sensor_fit, double shift_x, double shift_y,
-             int width, int height, double pixel_aspect_x,
-             double pixel_aspect_y, const Eigen::Matrix4d& matrix_world) {
-            BlenderCameraParams p;
-            p.lens_mm = lens_mm;
-            p.sensor_width_mm = sensor_width_mm;
-            p.sensor_height_mm = sensor_height_mm;
-            p.sensor_fit = ParseSensorFit(sensor_fit);
-            p.shift_x = shift_x;
-            p.shift_y = shift_y;
-            p.width = width;
-            p.height = height;
-            p.pixel_aspect_x = pixel_aspect_x;
-            p.pixel_aspect_y = pixel_aspect_y;
-            p.world_from_camera_local = matrix_world;
-            return Camera::FromBlender(p);
+          [](const py::object& params, const py::kwargs& kwargs) {
+            if (params.is_none()) {
+              RequireKeywords(kwargs,
+                              {"lens_mm", "sensor_width_mm", "sensor_height_mm",
+                               "width", "height", "matrix_world"},
+                              "from_blender");
+            }
+            return Camera::FromBlender(
+                OptionsFrom<BlenderCameraParams>(params, kwargs));
           },
-          py::arg("lens_mm"), py::arg("sensor_width_mm"),
-          py::arg("sensor_height_mm"), py::arg("sensor_fit") = "AUTO",
-          py::arg("shift_x") = 0.0, py::arg("shift_y") = 0.0,
-          py::arg("width"), py::arg("height"), py::arg("pixel_aspect_x") = 1.0,
-          py::arg("pixel_aspect_y") = 1.0, py::arg("matrix_world"),
+          py::kw_only(), py::arg("params") = py::none(),
           "Builds the camera from Blender's camera data, the image size in "
-          "pixels and the camera object's matrix_world (4x4).")
+          "pixels and the camera object's matrix_world (4x4): "
+          "params=BlenderCameraParams and/or its fields as keyword arguments "
+          "(lens_mm, sensor_width_mm, sensor_height_mm, width, height and "
+          "matrix_world required without params).")
       .def(
           "set_distortion",
-          [](Camera& c, double focal_x_px, double focal_y_px,
-             double principal_x_px, double principal_y_px, double k1,
-             double k2, double k3) {
-            PolynomialDistortion d;
-            d.focal_x_px = focal_x_px;
-            d.focal_y_px = focal_y_px;
-            d.principal_x_px = principal_x_px;
-            d.principal_y_px = principal_y_px;
-            d.k1 = k1;
-            d.k2 = k2;
-            d.k3 = k3;
-            c.SetDistortion(d);
+          [](Camera& c, const py::object& distortion,
+             const py::kwargs& kwargs) {
+            if (distortion.is_none()) {
+              RequireKeywords(kwargs,
+                              {"focal_x_px", "focal_y_px", "principal_x_px",
+                               "principal_y_px"},
+                              "set_distortion");
+            }
+            c.SetDistortion(
+                OptionsFrom<PolynomialDistortion>(distortion, kwargs));
           },
-          py::arg("focal_x_px"), py::arg("focal_y_px"),
-          py::arg("principal_x_px"), py::arg("principal_y_px"),
-          py::arg("k1") = 0.0, py::arg("k2") = 0.0, py::arg("k3") = 0.0,
+          py::kw_only(), py::arg("distortion") = py::none(),
           "Blender's polynomial lens distortion; principal point in OpenCV "
-          "pixels.")
-      .def_property_readonly("has_distortion",
-                             [](const Camera& c) {
-                               return c.distortion().has_value();
-                             })
+          "pixels: distortion=PolynomialDistortion and/or its fields as "
+          "keyword arguments (focal and principal point required without "
+          "it).")
+      .def_property_readonly(
+          "has_distortion",
+          [](const Camera& c) { return c.distortion().has_value(); })
       .def_property_readonly("K", &Camera::K)
       .def_property_readonly(
           "cam_from_world",
-          [](const Camera& c) { return Eigen::Matrix4d(c.cam_from_world().matrix()); })
+          [](const Camera& c) {
+            return Eigen::Matrix4d(c.cam_from_world().matrix());
+          })
       .def_property_readonly("center_in_world", &Camera::center_in_world)
       .def_property_readonly("width", &Camera::width)
       .def_property_readonly("height", &Camera::height)
@@ -134,7 +196,8 @@ void BindScene(py::module_& m) {
             for (py::ssize_t i = 0; i < n; ++i) {
               Eigen::Vector2d px;
               front[i] = c.WorldToPixel(Eigen::Vector3d(p + 3 * i), &px);
-              if (!front[i]) px.setConstant(std::numeric_limits<double>::quiet_NaN());
+              if (!front[i])
+                px.setConstant(std::numeric_limits<double>::quiet_NaN());
               out[2 * i] = px.x();
               out[2 * i + 1] = px.y();
             }
@@ -167,8 +230,8 @@ void BindScene(py::module_& m) {
              const float* v = CheckArray<float>(vertices, "vertices", {-1, 3});
              const int32_t* t =
                  CheckArray<int32_t>(triangles, "triangles", {-1, 3});
-             const int32_t* ids = CheckArray<int32_t>(
-                 object_ids, "object_ids", {triangles.shape(0)});
+             const int32_t* ids = CheckArray<int32_t>(object_ids, "object_ids",
+                                                      {triangles.shape(0)});
              py::gil_scoped_release release;
              return Scene(v, vertices.shape(0), t, triangles.shape(0), ids);
            }),
@@ -218,7 +281,9 @@ void BindScene(py::module_& m) {
           },
           py::arg("camera"), py::arg("pixels").noconvert(),
           (std::string("First hits of the camera rays through pixels (N,2) "
-                       "float64. ") + kHitDoc).c_str())
+                       "float64. ") +
+           kHitDoc)
+              .c_str())
       .def(
           "occluded",
           [](const Scene& s, const py::array& origins,

@@ -13,7 +13,8 @@ void BindSky(py::module_& m);
 
 PYBIND11_MODULE(_native, m) {
   m.doc() = "sunlapse native core: camera, scene ray casting, estimators";
-  m.attr("__version__") = "0.1.0";
+  // From blender_manifest.toml through CMake (one source for the version).
+  m.attr("__version__") = SUNLAPSE_VERSION;
   sunlapse::python::BindScene(m);
   sunlapse::python::BindEphemeris(m);
   sunlapse::python::BindEstimate(m);

@@ -1,5 +1,6 @@
 """Runs pytest inside Blender:
-  blender -b --factory-startup --python-exit-code 1 --python tests/blender/run_pytest.py -- [pytest args]
+  blender -b --factory-startup --python-exit-code 1 \
+    --python tests/blender/run_pytest.py -- [pytest args]
 """
 import os
 import sys

@@ -91,7 +91,7 @@ def test_scripted_run_writes_a_track_for_a_valid_scene(empty_scene, tmp_path):
     assert track["clip"].endswith("frame_0001.png")
     # The user is told why, in words.
     warnings = [l for l in proc.stdout.splitlines() if l.startswith("sunlapse: warning:")]
-    assert warnings and "2 frame(s): shadow lost: no sun/shade contrast" in warnings[-1]
+    assert warnings and "no frame shows shadows the model can cast" in warnings[-1]
 
 
 @pytest.mark.parametrize("missing,reason", [

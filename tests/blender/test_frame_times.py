@@ -4,7 +4,7 @@ import datetime as dt
 import json
 import os
 
-from sunlapse.core import evaluation
+from sunlapse.core.angles import angle_between_deg, sun_in_world_from_geographic
 from test_addon import error_lines, run_estimate
 
 
@@ -41,10 +41,10 @@ def test_frames_are_tracked_in_the_order_they_were_taken(tiny_plaza, tmp_path):
         assert dt.datetime.fromisoformat(f["time_utc"]) == utc
     for f, ref in zip(track["frames"], truth.frames):
         assert f["raw_zenith_deg"] is not None, f
-        err = evaluation.angle_between_deg(
-            evaluation.direction(f["raw_zenith_deg"],
-                                 f["raw_azimuth_deg"] + track["north_offset_deg"]),
-            evaluation.direction(ref.zenith_deg, ref.azimuth_deg + truth.north_offset_deg))
+        err = angle_between_deg(
+            sun_in_world_from_geographic(f["raw_zenith_deg"], f["raw_azimuth_deg"],
+                                         track["north_offset_deg"]),
+            sun_in_world_from_geographic(ref.zenith_deg, ref.azimuth_deg, truth.north_offset_deg))
         assert err < 3.0, (f["frame"], err)
 
 
@@ -110,8 +110,8 @@ def test_a_first_frame_without_a_clear_sun_is_tracked_back_from_the_next(tiny_pl
     f1, f2, f3 = track["frames"]
     assert f1["raw_zenith_deg"] is None and "black" in f1["reason"]
     for f, ref in ((f2, truth.frames[1]), (f3, truth.frames[2])):
-        err = evaluation.angle_between_deg(
-            evaluation.direction(f["raw_zenith_deg"],
-                                 f["raw_azimuth_deg"] + track["north_offset_deg"]),
-            evaluation.direction(ref.zenith_deg, ref.azimuth_deg + truth.north_offset_deg))
+        err = angle_between_deg(
+            sun_in_world_from_geographic(f["raw_zenith_deg"], f["raw_azimuth_deg"],
+                                         track["north_offset_deg"]),
+            sun_in_world_from_geographic(ref.zenith_deg, ref.azimuth_deg, truth.north_offset_deg))
         assert err < 3.0, (f["frame"], err)

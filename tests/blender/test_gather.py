@@ -1,7 +1,6 @@
 """Gathering the model from Blender and casting rays against it."""
 import bpy
 import numpy as np
-import pytest
 from mathutils import Vector
 
 import scenes

@@ -3,17 +3,16 @@ import json
 import os
 
 import bpy
-import numpy as np
 import pytest
 
-from conftest import ROOT
-from sunlapse.core import evaluation
+from sunlapse.core.angles import (angle_between_deg, azimuth_world_from_geographic,
+                                  sun_in_world_from_geographic)
 from test_addon import run_estimate
 
 
 def truth_dir(truth, frame=1):
     f = truth.frames[frame - 1]
-    return evaluation.direction(f.zenith_deg, f.azimuth_deg + truth.north_offset_deg)
+    return sun_in_world_from_geographic(f.zenith_deg, f.azimuth_deg, truth.north_offset_deg)
 
 
 def test_operator_points_a_new_sun_lamp_at_the_sun(tiny_plaza):
@@ -30,7 +29,7 @@ def test_operator_points_a_new_sun_lamp_at_the_sun(tiny_plaza):
     bpy.context.view_layer.update()
     toward = tuple(sun.matrix_world.col[2][:3])
     # A sanity bound at 128x96 pixels; accuracy targets live in the report.
-    assert evaluation.angle_between_deg(toward, truth_dir(truth)) < 5.0
+    assert angle_between_deg(toward, truth_dir(truth)) < 5.0
 
 
 @pytest.mark.parametrize("method", ["default", "thesis"])
@@ -42,14 +41,24 @@ def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
     track = json.load(open(track_path))
     assert track["method"]["initial"] == method and track["method"]["tracking"] == method
     assert [f["frame"] for f in track["frames"]] == [1, 2, 3]
-    assert track["initial"] is not None or track["frames"][0]["reason"]
+    # The tiny plaza is sunny on every frame: both methods find an initial
+    # Sun and measure every frame (no frame without angles).
+    init = track["initial"]
+    assert init is not None and init["zenith_deg"] is not None, track.get("initial_tries")
+    # A sanity bound for both: the thesis's baseline is coarse at 128x96
+    # pixels (measured 21 deg off, ours 0.4), yet finds the Sun's side of the sky.
+    assert angle_between_deg(
+        sun_in_world_from_geographic(init["zenith_deg"], init["azimuth_deg"],
+                                     track["north_offset_deg"]),
+        truth_dir(truth)) < 30.0
     for f, t in zip(track["frames"], truth.frames):
-        assert f["zenith_deg"] is not None or f["reason"], f
+        assert f["raw_zenith_deg"] is not None and f["raw_azimuth_deg"] is not None, f
+        assert f.get("reason") is None and 0 <= f["zenith_deg"] <= 90, f
         if method == "default":
             # A sanity bound at 128x96 pixels; accuracy targets live in the report.
-            est = evaluation.direction(f["zenith_deg"], f["azimuth_deg"] + track["north_offset_deg"])
-            tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
-            assert evaluation.angle_between_deg(est, tru) < 5.0
+            est = sun_in_world_from_geographic(f["zenith_deg"], f["azimuth_deg"],
+                                               track["north_offset_deg"])
+            assert angle_between_deg(est, truth_dir(truth, t.frame)) < 5.0
             assert f["shadow"]["end_px"] and f["confidence"] > 0
 
 
@@ -58,7 +67,7 @@ def test_a_wrong_start_is_found_again_from_scratch(tiny_plaza, tmp_path):
     # for again on a later frame, and from there the track is right.
     out, truth = tiny_plaza
     f1 = truth.frames[0]
-    wrong_azimuth = (f1.azimuth_deg + truth.north_offset_deg + 40.0) % 360
+    wrong_azimuth = azimuth_world_from_geographic(f1.azimuth_deg + 40.0, truth.north_offset_deg)
     track_path = str(tmp_path / "wrong.sun.json")
     proc = run_estimate(os.path.join(out, "scene.blend"), track_path,
                         "--initial-sun", str(f1.zenith_deg), str(wrong_azimuth))
@@ -66,6 +75,6 @@ def test_a_wrong_start_is_found_again_from_scratch(tiny_plaza, tmp_path):
     track = json.load(open(track_path))
     assert track["reacquired_frames"] == [3]
     last, t = track["frames"][-1], truth.frames[-1]
-    est = evaluation.direction(last["raw_zenith_deg"], last["raw_azimuth_deg"] + track["north_offset_deg"])
-    tru = evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)
-    assert evaluation.angle_between_deg(est, tru) < 5.0
+    est = sun_in_world_from_geographic(last["raw_zenith_deg"], last["raw_azimuth_deg"],
+                                       track["north_offset_deg"])
+    assert angle_between_deg(est, truth_dir(truth, t.frame)) < 5.0

@@ -3,7 +3,6 @@ example .blend opens its clip from ../shared/real, the scripted run finds the
 Sun, and the confident frames follow the ephemeris. Skipped when the footage
 is not beside the work tree (a clone elsewhere)."""
 import os
-import subprocess
 import sys
 
 import bpy
@@ -33,14 +32,26 @@ def test_march_clip_follows_the_ephemeris(tmp_path, native):
     import real
     from sunlapse.core import evaluation, trackfile
     out = str(tmp_path / "mar.sun.json")
-    assert real.run_clip(BLEND, out, "default", out + ".log") == 0, open(out + ".log").read()[-2000:]
+    assert real.run_clip(BLEND, out, "default", out + ".log") == 0, \
+        open(out + ".log").read()[-2000:]
     track = trackfile.read_track(out)
     truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),
                              native.sun_position)
     raw = real.raw_view(track)
-    # Every frame has an estimate, or a reason, or says it is doubtful.
-    for f in raw.frames:
-        assert f.has_estimate or f.reason or f.confidence < real.CONFIDENT
+    # The tracker measures all but a few frames: measured, frame 1 (18:08,
+    # the Sun 83 deg from the zenith, no sun/shade contrast left) and frames
+    # 13 and 15 (no match near the predicted Sun). Those say so (no raw
+    # angles, confidence 0) and are carried by their neighbours: their
+    # smoothed angles follow the ephemeris too (measured 0.5-3.5 deg zenith,
+    # the dial's own bias, and 0.1-1.4 deg azimuth).
+    unmeasured = [f for f in track.frames if f.raw_zenith_deg is None]
+    assert {f.frame for f in unmeasured} <= {1, 13, 15}, \
+        [(f.frame, f.reason) for f in unmeasured]
+    for f in unmeasured:
+        assert f.confidence == 0.0, (f.frame, f.confidence)
+        t = truth.frame(f.frame)
+        assert f.has_estimate and abs(f.zenith_deg - t.zenith_deg) < 4.5, (f.frame, f.zenith_deg)
+        assert evaluation.azimuth_difference_deg(f.azimuth_deg, t.azimuth_deg) < 3.0, f.frame
     r = evaluation.evaluate("march", real.confident_only(raw), truth)
     assert r.frames_estimated >= 30
     # Measured 0.76 mean / 1.53 max azimuth and 2.87 mean zenith (the dial's
@@ -58,7 +69,8 @@ def test_march_clip_physical_smoothing_meets_the_target(tmp_path, native):
     import real
     from sunlapse.core import evaluation, trackfile
     out = str(tmp_path / "mar.phys.sun.json")
-    assert real.run_clip(BLEND, out, "physical", out + ".log") == 0, open(out + ".log").read()[-2000:]
+    assert real.run_clip(BLEND, out, "physical", out + ".log") == 0, \
+        open(out + ".log").read()[-2000:]
     track = trackfile.read_track(out)
     assert track.method["smoothing"] == "physical"
     truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),

@@ -1,5 +1,4 @@
 """Matching the camera from tracking markers named after their ground points."""
-import math
 
 import bpy
 import pytest
@@ -18,7 +17,8 @@ def mark(clip, scene, cam_obj, points, frame=1):
 
 def ground_points():
     return [(f"p{i} {x} {y}", (x, y, 0.0))
-            for i, (x, y) in enumerate((x, y) for x in (-1.5, -0.5, 0.5, 1.5) for y in (-0.5, 0.5, 1.5))]
+            for i, (x, y) in enumerate((x, y) for x in (-1.5, -0.5, 0.5, 1.5)
+                                       for y in (-0.5, 0.5, 1.5))]
 
 
 def test_solve_camera_recovers_the_camera(empty_scene, tmp_path):

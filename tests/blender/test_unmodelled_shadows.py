@@ -45,7 +45,7 @@ def test_run_notes_the_shadow_of_a_caster_missing_from_the_model(long_plaza, tmp
         assert gt[y, x], r
         assert 0 < r["darkening"] < 0.7 and r["edge_contrast"] > 2.5
     assert "not cast by the model" in track["model_hint"]
-    assert any(l.startswith("sunlapse: note:") for l in proc.stdout.splitlines())
+    assert any(line.startswith("sunlapse: note:") for line in proc.stdout.splitlines())
 
 
 def test_a_clip_too_short_for_a_background_gets_no_note(tiny_plaza, tmp_path):

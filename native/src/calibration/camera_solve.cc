@@ -47,24 +47,29 @@ void CameraSolveOptions::Check() const {
 }
 
 CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
-                              const std::vector<Eigen::Vector2d>& pixels, int width,
-                              int height, const CameraSolveOptions& o) {
+                              const std::vector<Eigen::Vector2d>& pixels,
+                              int width, int height,
+                              const CameraSolveOptions& o) {
   o.Check();
   Require(width > 0 && height > 0, "width and height must be > 0");
-  Require(world.size() == pixels.size(), "points_in_world and pixels differ in length");
-  for (const auto& p : world) Require(p.allFinite(), "points_in_world: not finite");
+  Require(world.size() == pixels.size(),
+          "points_in_world and pixels differ in length");
+  for (const auto& p : world)
+    Require(p.allFinite(), "points_in_world: not finite");
   for (const auto& p : pixels) Require(p.allFinite(), "pixels: not finite");
   CameraSolveResult out;
   const bool estimate_focal = !(o.focal_px > 0);
   const size_t need = estimate_focal ? 6 : 4;
   if (world.size() < need) {
     out.message = "need at least " + std::to_string(need) + " marked points" +
-                  (estimate_focal ? " to estimate the focal length" : "") + ", got " +
-                  std::to_string(world.size());
+                  (estimate_focal ? " to estimate the focal length" : "") +
+                  ", got " + std::to_string(world.size());
     return out;
   }
-  const double cx = std::isfinite(o.principal_x_px) ? o.principal_x_px : 0.5 * width - 0.5;
-  const double cy = std::isfinite(o.principal_y_px) ? o.principal_y_px : 0.5 * height - 0.5;
+  const double cx =
+      std::isfinite(o.principal_x_px) ? o.principal_x_px : 0.5 * width - 0.5;
+  const double cy =
+      std::isfinite(o.principal_y_px) ? o.principal_y_px : 0.5 * height - 0.5;
   std::vector<cv::Point3f> obj;
   std::vector<cv::Point2f> img;
   for (size_t i = 0; i < world.size(); ++i) {
@@ -77,8 +82,10 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
     if (estimate_focal) {
       const PlaneFit plane = FitPlane(world);
       if (plane.flatness > 1e-3) {
-        out.message = "estimating the focal length needs coplanar points (e.g. all on the "
-                      "ground); give the focal length for points off one plane";
+        out.message =
+            "estimating the focal length needs coplanar points (e.g. all on "
+            "the "
+            "ground); give the focal length for points off one plane";
         return out;
       }
       // Planar calibration from one view: focal only (centre fixed, square
@@ -88,24 +95,28 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
         const Eigen::Vector3d q = plane.plane_from_world * (v - plane.mean);
         planar.emplace_back(q.x(), q.y(), 0.f);
       }
-      cv::Mat K = (cv::Mat_<double>(3, 3) << width, 0, cx, 0, width, cy, 0, 0, 1);
+      cv::Mat K =
+          (cv::Mat_<double>(3, 3) << width, 0, cx, 0, width, cy, 0, 0, 1);
       cv::Mat dist = cv::Mat::zeros(5, 1, CV_64F);
       std::vector<cv::Mat> rv, tv;
-      cv::calibrateCamera(std::vector<std::vector<cv::Point3f>>{planar},
-                          std::vector<std::vector<cv::Point2f>>{img}, cv::Size(width, height), K,
-                          dist, rv, tv,
-                          cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_PRINCIPAL_POINT |
-                              cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_ZERO_TANGENT_DIST |
-                              cv::CALIB_FIX_K1 | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3);
+      cv::calibrateCamera(
+          std::vector<std::vector<cv::Point3f>>{planar},
+          std::vector<std::vector<cv::Point2f>>{img}, cv::Size(width, height),
+          K, dist, rv, tv,
+          cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_PRINCIPAL_POINT |
+              cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_ZERO_TANGENT_DIST |
+              cv::CALIB_FIX_K1 | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3);
       f = K.at<double>(0, 0);
       if (!(f > 0) || !std::isfinite(f)) {
-        out.message = "the focal length could not be estimated (points too few or seen "
-                      "head-on): give the focal length";
+        out.message =
+            "the focal length could not be estimated (points too few or seen "
+            "head-on): give the focal length";
         return out;
       }
     }
     const cv::Mat K = (cv::Mat_<double>(3, 3) << f, 0, cx, 0, f, cy, 0, 0, 1);
-    cv::solvePnP(obj, img, K, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_SQPNP);
+    cv::solvePnP(obj, img, K, cv::noArray(), rvec, tvec, false,
+                 cv::SOLVEPNP_SQPNP);
     cv::solvePnPRefineLM(obj, img, K, cv::noArray(), rvec, tvec);
     std::vector<cv::Point2f> back;
     cv::projectPoints(obj, rvec, tvec, K, cv::noArray(), back);
@@ -138,13 +149,15 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
   // Every point must lie in front of the camera.
   for (const auto& p : world) {
     if ((r * p + t).z() <= 0) {
-      out.message = "the solution puts marked points behind the camera: check the points";
+      out.message =
+          "the solution puts marked points behind the camera: check the points";
       return out;
     }
   }
   out.success = true;
   if (out.rms_px > 3.0) {
-    out.message = "reprojection error " + std::to_string(out.rms_px).substr(0, 5) +
+    out.message = "reprojection error " +
+                  std::to_string(out.rms_px).substr(0, 5) +
                   " px: some points may be marked or named wrongly";
   }
   return out;

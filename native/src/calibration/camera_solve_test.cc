@@ -10,7 +10,9 @@
 namespace sunlapse {
 namespace {
 
-Camera Truth() { return testing::LookAt({0.3, -4.0, 3.0}, {0, 0.5, 0}, 320, 240, 30); }
+Camera Truth() {
+  return testing::LookAt({0.3, -4.0, 3.0}, {0, 0.5, 0}, 320, 240, 30);
+}
 
 void Marks(const Camera& cam, double noise, std::vector<Eigen::Vector3d>* w,
            std::vector<Eigen::Vector2d>* px) {
@@ -34,7 +36,9 @@ TEST(SolveCamera, RecoversFocalAndPoseFromExactGroundPoints) {
   const CameraSolveResult r = SolveCamera(w, px, 320, 240);
   ASSERT_TRUE(r.success) << r.message;
   EXPECT_NEAR(r.focal_px, truth.K()(0, 0), 1e-3 * truth.K()(0, 0));
-  EXPECT_LT((r.blender_matrix_world.block<3, 1>(0, 3) - truth.center_in_world()).norm(), 1e-3);
+  EXPECT_LT((r.blender_matrix_world.block<3, 1>(0, 3) - truth.center_in_world())
+                .norm(),
+            1e-3);
   EXPECT_LT(r.rms_px, 1e-3);
   // The Blender matrix builds the same camera again.
   BlenderCameraParams p;
@@ -61,7 +65,9 @@ TEST(SolveCamera, NoisyMarksGiveAConsistentCamera) {
   const CameraSolveResult r = SolveCamera(w, px, 320, 240);
   ASSERT_TRUE(r.success) << r.message;
   EXPECT_NEAR(r.focal_px, truth.K()(0, 0), 0.05 * truth.K()(0, 0));
-  EXPECT_LT((r.blender_matrix_world.block<3, 1>(0, 3) - truth.center_in_world()).norm(), 0.25);
+  EXPECT_LT((r.blender_matrix_world.block<3, 1>(0, 3) - truth.center_in_world())
+                .norm(),
+            0.25);
   EXPECT_LT(r.rms_px, 0.6);
 }
 
@@ -86,7 +92,8 @@ TEST(SolveCamera, SaysWhatIsMissingOrWrong) {
   Marks(truth, 0.0, &w, &px);
   std::vector<Eigen::Vector3d> w5(w.begin(), w.begin() + 5);
   std::vector<Eigen::Vector2d> p5(px.begin(), px.begin() + 5);
-  EXPECT_NE(SolveCamera(w5, p5, 320, 240).message.find("at least 6"), std::string::npos);
+  EXPECT_NE(SolveCamera(w5, p5, 320, 240).message.find("at least 6"),
+            std::string::npos);
   std::swap(px[0], px[7]);  // two points named wrongly
   const CameraSolveResult r = SolveCamera(w, px, 320, 240);
   EXPECT_GT(r.rms_px, 3.0);

@@ -8,7 +8,8 @@ namespace sunlapse {
 namespace {
 
 // Weighted normal equations of y = a + b x, solved with a, b >= 0.
-void SolveGroup(double s0, double sx, double sxx, double sy, double sxy, double* a, double* b) {
+void SolveGroup(double s0, double sx, double sxx, double sy, double sxy,
+                double* a, double* b) {
   const double det = s0 * sxx - sx * sx;
   const bool solvable = s0 > 0 && det > 1e-9 * s0 * std::max(sxx, 1e-12);
   *a = *b = 0;

@@ -26,7 +26,8 @@ TEST(RobustAffineFit, RecoversLinesPerGroupDespiteOutliers) {
 
 TEST(RobustAffineFit, KeepsBothTermsNonNegative) {
   const float x[] = {0, 0.5f, 1, 0, 0.5f, 1};
-  const float y[] = {0.9f, 0.5f, 0.1f, 0.9f, 0.5f, 0.1f};  // falling: b would be < 0
+  const float y[] = {0.9f, 0.5f, 0.1f,
+                     0.9f, 0.5f, 0.1f};  // falling: b would be < 0
   AffineFit fit;
   RobustAffineFit(6, x, y, nullptr, 1, 0.1, 3, &fit);
   EXPECT_EQ(fit.b[0], 0.0);

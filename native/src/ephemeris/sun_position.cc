@@ -2,6 +2,8 @@
 
 #include <erfa.h>
 
+#include "sunlapse/common/angles.h"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -20,9 +22,11 @@ void Require(bool ok, const std::string& message) {
 void SunPositionOptions::Check() const {
   Require(std::isfinite(elevation_m) && elevation_m > -500 && elevation_m < 1e5,
           "elevation_m must be in (-500, 100000) m");
-  Require(std::isfinite(pressure_hpa) && pressure_hpa >= 0 && pressure_hpa < 2000,
-          "pressure_hpa must be in [0, 2000)");
-  Require(std::isfinite(temperature_c) && temperature_c > -150 && temperature_c < 200,
+  Require(
+      std::isfinite(pressure_hpa) && pressure_hpa >= 0 && pressure_hpa < 2000,
+      "pressure_hpa must be in [0, 2000)");
+  Require(std::isfinite(temperature_c) && temperature_c > -150 &&
+              temperature_c < 200,
           "temperature_c must be in (-150, 200)");
   Require(std::isfinite(relative_humidity) && relative_humidity >= 0 &&
               relative_humidity <= 1,
@@ -44,22 +48,20 @@ SunPosition SunPositionAt(const UtcTime& utc, double latitude_deg,
   Require(utc.second >= 0 && utc.second < 61, "second must be in [0, 61)");
   if (eraDtf2d("UTC", utc.year, utc.month, utc.day, utc.hour, utc.minute,
                utc.second, &utc1, &utc2) < 0) {
-    throw std::invalid_argument("utc: invalid date or time " +
-                                std::to_string(utc.year) + "-" +
-                                std::to_string(utc.month) + "-" +
-                                std::to_string(utc.day) + " " +
-                                std::to_string(utc.hour) + ":" +
-                                std::to_string(utc.minute) + ":" +
-                                std::to_string(sec_int));
+    throw std::invalid_argument(
+        "utc: invalid date or time " + std::to_string(utc.year) + "-" +
+        std::to_string(utc.month) + "-" + std::to_string(utc.day) + " " +
+        std::to_string(utc.hour) + ":" + std::to_string(utc.minute) + ":" +
+        std::to_string(sec_int));
   }
   eraASTROM astrom;
   double eo;
   // Status +1 ("dubious year": outside the leap-second table) still gives a
   // usable answer; TT-UTC error of a few seconds moves the Sun < 0.001 deg.
-  const int status = eraApco13(
-      utc1, utc2, options.dut1_s, longitude_deg * kDeg, latitude_deg * kDeg,
-      options.elevation_m, 0.0, 0.0, options.pressure_hpa,
-      options.temperature_c, options.relative_humidity, 0.55, &astrom, &eo);
+  const int status = eraApco13(utc1, utc2, options.dut1_s, longitude_deg * kDeg,
+                               latitude_deg * kDeg, options.elevation_m, 0.0,
+                               0.0, options.pressure_hpa, options.temperature_c,
+                               options.relative_humidity, 0.55, &astrom, &eo);
   Require(status >= 0, "utc: ERFA rejected the date");
 
   // Direction from the observer to the Sun: minus the observer's heliocentric
@@ -78,17 +80,17 @@ SunPosition SunPositionAt(const UtcTime& utc, double latitude_deg,
   eraAtioq(eraAnp(ri), di, &astrom, &aob, &zob, &hob, &dob, &rob);
   SunPosition out;
   out.zenith_deg = zob / kDeg;
-  out.azimuth_deg = std::fmod(aob / kDeg + 360.0, 360.0);
+  out.azimuth_deg = WrapAzimuthDeg(aob / kDeg);
   return out;
 }
 
 void SunDirection(double zenith_deg, double azimuth_deg,
                   double north_offset_deg, double out_xyz[3]) {
-  const double z = zenith_deg * kDeg;
-  const double a = (azimuth_deg + north_offset_deg) * kDeg;
-  out_xyz[0] = std::sin(z) * std::sin(a);
-  out_xyz[1] = std::sin(z) * std::cos(a);
-  out_xyz[2] = std::cos(z);
+  const Eigen::Vector3d d = SunInWorldFromAngles(
+      zenith_deg, AzimuthWorldFromGeographic(azimuth_deg, north_offset_deg));
+  out_xyz[0] = d.x();
+  out_xyz[1] = d.y();
+  out_xyz[2] = d.z();
 }
 
 }  // namespace sunlapse

@@ -43,10 +43,13 @@ void LowPrecision(const UtcTime& t, double lat, double lon, double* zenith,
   };
   const double n = days_from_civil(t.year, t.month, t.day) - 10957.5 +
                    (t.hour + t.minute / 60.0 + t.second / 3600.0) / 24.0;
-  const double L = 280.460 + 0.9856474 * n, g = (357.528 + 0.9856003 * n) * kDeg;
-  const double lambda = (L + 1.915 * std::sin(g) + 0.020 * std::sin(2 * g)) * kDeg;
+  const double L = 280.460 + 0.9856474 * n,
+               g = (357.528 + 0.9856003 * n) * kDeg;
+  const double lambda =
+      (L + 1.915 * std::sin(g) + 0.020 * std::sin(2 * g)) * kDeg;
   const double eps = (23.439 - 0.0000004 * n) * kDeg;
-  const double ra = std::atan2(std::cos(eps) * std::sin(lambda), std::cos(lambda));
+  const double ra =
+      std::atan2(std::cos(eps) * std::sin(lambda), std::cos(lambda));
   const double dec = std::asin(std::sin(eps) * std::sin(lambda));
   const double gmst_deg = 280.46061837 + 360.98564736629 * n;
   const double H = gmst_deg * kDeg + lon * kDeg - ra;
@@ -75,17 +78,19 @@ TEST_P(SunPositionCrossCheck, AgreesWithIndependentFormula) {
   double z, a;
   LowPrecision(c.t, c.lat, c.lon, &z, &a);
   EXPECT_NEAR(s.zenith_deg, z, 0.03);
-  EXPECT_LT(AzimuthDiff(s.azimuth_deg, a), 0.03 / std::max(0.2, std::sin(z * kDeg)));
+  EXPECT_LT(AzimuthDiff(s.azimuth_deg, a),
+            0.03 / std::max(0.2, std::sin(z * kDeg)));
 }
 
 INSTANTIATE_TEST_SUITE_P(
     BothHemispheres, SunPositionCrossCheck,
-    ::testing::Values(Case{{2024, 6, 21, 12, 0, 0}, 51.48, 0.0},      // London
-                      Case{{2024, 12, 21, 3, 0, 0}, -33.87, 151.21},  // Sydney
-                      Case{{2005, 1, 13, 10, 0, 0}, 43.3, 5.4},       // Marseille
-                      Case{{2010, 3, 20, 18, 0, 0}, -34.6, -58.4},    // Buenos Aires
-                      Case{{2031, 9, 1, 23, 45, 10}, 35.68, 139.69},  // Tokyo
-                      Case{{2019, 7, 4, 16, 20, 0}, -1.29, 36.82}));  // Nairobi
+    ::testing::Values(
+        Case{{2024, 6, 21, 12, 0, 0}, 51.48, 0.0},      // London
+        Case{{2024, 12, 21, 3, 0, 0}, -33.87, 151.21},  // Sydney
+        Case{{2005, 1, 13, 10, 0, 0}, 43.3, 5.4},       // Marseille
+        Case{{2010, 3, 20, 18, 0, 0}, -34.6, -58.4},    // Buenos Aires
+        Case{{2031, 9, 1, 23, 45, 10}, 35.68, 139.69},  // Tokyo
+        Case{{2019, 7, 4, 16, 20, 0}, -1.29, 36.82}));  // Nairobi
 
 TEST(SunPosition, SouthernNoonSunIsInTheNorth) {
   // Sydney, around local solar noon (UTC+10:05 in solar time) in June.
@@ -120,11 +125,14 @@ TEST(SunPosition, DirectionFollowsDesignConvention) {
 }
 
 TEST(SunPosition, RejectsBadInput) {
-  EXPECT_THROW(SunPositionAt({2024, 2, 30, 0, 0, 0}, 0, 0), std::invalid_argument);
-  EXPECT_THROW(SunPositionAt({2024, 1, 1, 0, 0, 0}, 91, 0), std::invalid_argument);
+  EXPECT_THROW(SunPositionAt({2024, 2, 30, 0, 0, 0}, 0, 0),
+               std::invalid_argument);
+  EXPECT_THROW(SunPositionAt({2024, 1, 1, 0, 0, 0}, 91, 0),
+               std::invalid_argument);
   SunPositionOptions o;
   o.dut1_s = 3;
-  EXPECT_THROW(SunPositionAt({2024, 1, 1, 0, 0, 0}, 0, 0, o), std::invalid_argument);
+  EXPECT_THROW(SunPositionAt({2024, 1, 1, 0, 0, 0}, 0, 0, o),
+               std::invalid_argument);
 }
 
 }  // namespace

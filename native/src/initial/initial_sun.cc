@@ -1,5 +1,6 @@
 #include "sunlapse/initial/initial_sun.h"
 
+#include "sunlapse/common/angles.h"
 #include "sunlapse/common/robust_fit.h"
 
 #include <ceres/ceres.h>
@@ -25,11 +26,11 @@ struct Cancelled {};
 // The pixels the fit uses: where each sees the model, and what it shows.
 struct Samples {
   std::vector<Eigen::Vector2d> pixel;
-  std::vector<float> origin;          // N x 3: point + offset along the normal
+  std::vector<float> origin;  // N x 3: point + offset along the normal
   std::vector<Eigen::Vector3f> normal;
   std::vector<float> intensity;
-  std::vector<int> group;              // compact object index
-  std::vector<int32_t> group_object;   // group -> object id
+  std::vector<int> group;             // compact object index
+  std::vector<int32_t> group_object;  // group -> object id
   int num_groups = 0;
   int size() const { return static_cast<int>(intensity.size()); }
 };
@@ -39,7 +40,8 @@ Samples GatherSamples(const Scene& scene, const Camera& camera,
   const int top = o.ignore_top_rows;
   const int bottom = frame.rows - o.ignore_bottom_rows;
   const double area = static_cast<double>(frame.cols) * (bottom - top);
-  const int step = std::max(1, static_cast<int>(std::floor(std::sqrt(area / o.max_pixels))));
+  const int step =
+      std::max(1, static_cast<int>(std::floor(std::sqrt(area / o.max_pixels))));
   std::vector<double> px;
   for (int y = top + step / 2; y < bottom; y += step) {
     for (int x = step / 2; x < frame.cols; x += step) {
@@ -90,7 +92,10 @@ Samples GatherSamples(const Scene& scene, const Camera& camera,
 class DirectionCost {
  public:
   DirectionCost(const Scene& scene, const Samples& s, double loss_scale)
-      : scene_(scene), s_(s), scale_(loss_scale), occluded_(s.size()),
+      : scene_(scene),
+        s_(s),
+        scale_(loss_scale),
+        occluded_(s.size()),
         shading_(s.size()) {}
 
   double operator()(const Eigen::Vector3d& toward_sun) {
@@ -102,8 +107,8 @@ class DirectionCost {
     for (int i = 0; i < s_.size(); ++i) {
       shading_[i] = occluded_[i] ? 0.f : std::max(0.f, s_.normal[i].dot(d));
     }
-    RobustAffineFit(s_.size(), shading_.data(), s_.intensity.data(), s_.group.data(),
-                    s_.num_groups, scale_, 4, &fit_);
+    RobustAffineFit(s_.size(), shading_.data(), s_.intensity.data(),
+                    s_.group.data(), s_.num_groups, scale_, 4, &fit_);
     return fit_.cost;
   }
 
@@ -132,10 +137,6 @@ std::vector<Eigen::Vector3d> FibonacciHemisphere(int n, double max_zenith_deg) {
   return out;
 }
 
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) / kDeg;
-}
-
 struct Evaluated {
   Eigen::Vector3d dir;
   double cost;
@@ -156,15 +157,16 @@ Evaluated RefineDirection(const Evaluated& start, double step_deg,
   Evaluated best = start;
   double h = step_deg * kDeg;
   const double tol = o.refine_tolerance_deg * kDeg;
-  const Eigen::Vector2d moves[8] = {{1, 0},  {-1, 0}, {0, 1},  {0, -1},
-                                    {1, 1},  {-1, -1}, {1, -1}, {-1, 1}};
+  const Eigen::Vector2d moves[8] = {{1, 0}, {-1, 0},  {0, 1},  {0, -1},
+                                    {1, 1}, {-1, -1}, {1, -1}, {-1, 1}};
   int guard = 0;
   while (h > tol && guard++ < 200) {
     Evaluated step_best = best;
     Eigen::Vector2d step_uv = uv;
     for (const auto& m : moves) {
       const Eigen::Vector2d cand = uv + h * m.normalized();
-      const Eigen::Vector3d d = (start.dir + cand.x() * e1 + cand.y() * e2).normalized();
+      const Eigen::Vector3d d =
+          (start.dir + cand.x() * e1 + cand.y() * e2).normalized();
       if (d.z() < zmin) continue;
       const double c = cost(d);
       seen->push_back({d, c});
@@ -198,7 +200,8 @@ void ResidualStats(const std::vector<double>& r, double loss_scale,
       ++inliers;
     }
   }
-  out->inlier_fraction = r.empty() ? 0.0 : static_cast<double>(inliers) / r.size();
+  out->inlier_fraction =
+      r.empty() ? 0.0 : static_cast<double>(inliers) / r.size();
   out->residual_rms = inliers > 0 ? std::sqrt(sum2 / inliers) : 0.0;
 }
 
@@ -240,13 +243,15 @@ void FitIntensities(const Samples& s, const std::vector<float>& shading,
                     int num_objects, InitialSunResult* out) {
   std::vector<int> count(s.num_groups, 0);
   for (int g : s.group) ++count[g];
-  const int ref = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+  const int ref = static_cast<int>(
+      std::max_element(count.begin(), count.end()) - count.begin());
   std::vector<double> rho(s.num_groups, 1.0);
   double light[2] = {0.05, 0.5};
   ceres::Problem problem;
   for (int i = 0; i < s.size(); ++i) {
-    problem.AddResidualBlock(new AlbedoShadingResidual(s.intensity[i], shading[i]),
-                             new ceres::CauchyLoss(loss_scale), &rho[s.group[i]], light);
+    problem.AddResidualBlock(
+        new AlbedoShadingResidual(s.intensity[i], shading[i]),
+        new ceres::CauchyLoss(loss_scale), &rho[s.group[i]], light);
   }
   for (int g = 0; g < s.num_groups; ++g) {
     problem.SetParameterLowerBound(&rho[g], 0, 1e-4);
@@ -260,21 +265,25 @@ void FitIntensities(const Samples& s, const std::vector<float>& shading,
   out->albedo_per_object.assign(num_objects, 1.0);
   if (o.per_object_albedo) {
     for (int g = 0; g < s.num_groups; ++g) {
-      if (s.group_object[g] < num_objects) out->albedo_per_object[s.group_object[g]] = rho[g];
+      if (s.group_object[g] < num_objects)
+        out->albedo_per_object[s.group_object[g]] = rho[g];
     }
   }
   std::vector<double> r(s.size());
   for (int i = 0; i < s.size(); ++i) {
-    r[i] = s.intensity[i] - rho[s.group[i]] * (light[0] + light[1] * shading[i]);
+    r[i] =
+        s.intensity[i] - rho[s.group[i]] * (light[0] + light[1] * shading[i]);
   }
   ResidualStats(r, loss_scale, out);
 }
 
 void EstimateDefault(const Scene& scene, const Samples& s,
-                     const InitialSunOptions& o, const ProgressCallback& progress,
-                     int num_objects, InitialSunResult* out) {
+                     const InitialSunOptions& o,
+                     const ProgressCallback& progress, int num_objects,
+                     InitialSunResult* out) {
   DirectionCost cost(scene, s, out->loss_scale_abs);
-  const auto candidates = FibonacciHemisphere(o.num_candidates, o.max_zenith_deg);
+  const auto candidates =
+      FibonacciHemisphere(o.num_candidates, o.max_zenith_deg);
   std::vector<Evaluated> seen;
   seen.reserve(candidates.size() * 4);
   for (size_t k = 0; k < candidates.size(); ++k) {
@@ -283,20 +292,25 @@ void EstimateDefault(const Scene& scene, const Samples& s,
   }
   // Spacing of the candidate grid: sqrt(solid angle per candidate).
   const double spacing_deg =
-      std::sqrt(2 * M_PI * (1 - std::cos(o.max_zenith_deg * kDeg)) / o.num_candidates) / kDeg;
+      std::sqrt(2 * M_PI * (1 - std::cos(o.max_zenith_deg * kDeg)) /
+                o.num_candidates) /
+      kDeg;
   std::vector<Evaluated> order = seen;
-  std::sort(order.begin(), order.end(),
-            [](const Evaluated& a, const Evaluated& b) { return a.cost < b.cost; });
+  std::sort(
+      order.begin(), order.end(),
+      [](const Evaluated& a, const Evaluated& b) { return a.cost < b.cost; });
   std::vector<Evaluated> starts;
   for (const auto& e : order) {
     bool far = true;
-    for (const auto& st : starts) far &= AngleDeg(st.dir, e.dir) > 2.5 * spacing_deg;
+    for (const auto& st : starts)
+      far &= AngleBetweenDeg(st.dir, e.dir) > 2.5 * spacing_deg;
     if (far) starts.push_back(e);
     if (static_cast<int>(starts.size()) >= o.num_refine_starts) break;
   }
   Evaluated best = order.front();
   for (size_t k = 0; k < starts.size(); ++k) {
-    const Evaluated refined = RefineDirection(starts[k], spacing_deg, o, cost, &seen);
+    const Evaluated refined =
+        RefineDirection(starts[k], spacing_deg, o, cost, &seen);
     if (refined.cost < best.cost) best = refined;
     Report(progress, 0.5 + 0.4 * (k + 1) / starts.size());
   }
@@ -304,7 +318,8 @@ void EstimateDefault(const Scene& scene, const Samples& s,
   const double threshold = best.cost * 1.005 + 1.0;
   double spread = 0;
   for (const auto& e : seen) {
-    if (e.cost <= threshold) spread = std::max(spread, AngleDeg(e.dir, best.dir));
+    if (e.cost <= threshold)
+      spread = std::max(spread, AngleBetweenDeg(e.dir, best.dir));
   }
   cost(best.dir);  // leaves the shading of the best direction in `cost`
   FitIntensities(s, cost.shading(), out->loss_scale_abs, o, num_objects, out);
@@ -319,8 +334,9 @@ void EstimateDefault(const Scene& scene, const Samples& s,
     }
   }
   if (shadowed < std::max(5, s.size() / 500)) {
-    out->message = "no cast shadow is visible toward the estimated Sun: the "
-                   "azimuth rests on shading alone";
+    out->message =
+        "no cast shadow is visible toward the estimated Sun: the "
+        "azimuth rests on shading alone";
     out->confidence *= 0.5;
   }
   if (spread > 20.0) {
@@ -355,17 +371,17 @@ class ThesisResidual : public ceres::CostFunction {
 };
 
 void EstimateThesis(const Scene& scene, const Samples& s,
-                    const InitialSunOptions& o, const ProgressCallback& progress,
-                    InitialSunResult* out) {
+                    const InitialSunOptions& o,
+                    const ProgressCallback& progress, InitialSunResult* out) {
   const Eigen::AlignedBox3f b = scene.bounds();
   const Eigen::Vector3d center = b.center().cast<double>();
-  const double radius = std::max(1e-3, 0.5 * static_cast<double>(b.diagonal().norm()));
+  const double radius =
+      std::max(1e-3, 0.5 * static_cast<double>(b.diagonal().norm()));
   const int K = o.thesis_num_lights;
-  const double e = o.thesis_light_elevation_deg * kDeg;
+  const double light_zenith_deg = 90.0 - o.thesis_light_elevation_deg;
   std::vector<Eigen::Vector3d> light_dir(K), light_pos(K);
   for (int k = 0; k < K; ++k) {
-    const double az = 2 * M_PI * k / K;
-    light_dir[k] = Eigen::Vector3d(std::cos(e) * std::sin(az), std::cos(e) * std::cos(az), std::sin(e));
+    light_dir[k] = SunInWorldFromAngles(light_zenith_deg, 360.0 * k / K);
     light_pos[k] = center + radius * light_dir[k];
   }
   // Per pixel and light: max(0, L.N) if the light reaches the point.
@@ -376,23 +392,29 @@ void EstimateThesis(const Scene& scene, const Samples& s,
   for (int k = 0; k < K; ++k) {
     float t_far = std::numeric_limits<float>::infinity();
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector3d p(s.origin[3 * i], s.origin[3 * i + 1], s.origin[3 * i + 2]);
+      const Eigen::Vector3d p(s.origin[3 * i], s.origin[3 * i + 1],
+                              s.origin[3 * i + 2]);
       const Eigen::Vector3d v = light_pos[k] - p;
       for (int c = 0; c < 3; ++c) dirs[3 * i + c] = static_cast<float>(v[c]);
     }
     // The lights sit on the sphere that encloses the model's bounds, so
     // nothing lies beyond them: an unbounded ray toward the light is exact.
-    scene.Occluded(n, s.origin.data(), dirs.data(), 0.f, t_far, occluded.data());
+    scene.Occluded(n, s.origin.data(), dirs.data(), 0.f, t_far,
+                   occluded.data());
     for (int i = 0; i < n; ++i) {
       const Eigen::Vector3d v(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2]);
-      coef[i][k] = occluded[i] ? 0.0 : std::max(0.0, s.normal[i].cast<double>().dot(v.normalized()));
+      coef[i][k] =
+          occluded[i]
+              ? 0.0
+              : std::max(0.0, s.normal[i].cast<double>().dot(v.normalized()));
     }
     Report(progress, 0.6 * (k + 1) / K);
   }
   std::vector<double> x(K + 1, 0.1);
   ceres::Problem problem;
   for (int i = 0; i < n; ++i) {
-    problem.AddResidualBlock(new ThesisResidual(s.intensity[i], coef[i]), nullptr, x.data());
+    problem.AddResidualBlock(new ThesisResidual(s.intensity[i], coef[i]),
+                             nullptr, x.data());
   }
   for (int k = 0; k <= K; ++k) problem.SetParameterLowerBound(x.data(), k, 0.0);
   SolveSmall(&problem, 100);
@@ -420,7 +442,8 @@ void EstimateThesis(const Scene& scene, const Samples& s,
     r[i] = s.intensity[i] - model;
   }
   ResidualStats(r, out->loss_scale_abs, out);
-  out->spread_deg = std::numeric_limits<double>::quiet_NaN();  // thesis gives none
+  out->spread_deg =
+      std::numeric_limits<double>::quiet_NaN();  // thesis gives none
   out->confidence = out->inlier_fraction;
 }
 
@@ -430,7 +453,8 @@ void InitialSunOptions::Check() const {
   Require(max_pixels >= 100, "max_pixels must be >= 100");
   Require(ignore_top_rows >= 0 && ignore_bottom_rows >= 0,
           "ignore_top_rows/ignore_bottom_rows must be >= 0");
-  Require(min_intensity >= 0 && max_intensity > min_intensity && max_intensity <= 1.0,
+  Require(min_intensity >= 0 && max_intensity > min_intensity &&
+              max_intensity <= 1.0,
           "need 0 <= min_intensity < max_intensity <= 1");
   Require(thesis_num_lights >= 1 && thesis_num_lights <= 256,
           "thesis_num_lights must be in [1, 256]");
@@ -441,20 +465,8 @@ void InitialSunOptions::Check() const {
   Require(num_refine_starts >= 1, "num_refine_starts must be >= 1");
   Require(refine_tolerance_deg > 0, "refine_tolerance_deg must be > 0");
   Require(loss_scale > 0, "loss_scale must be > 0");
-  Require(max_zenith_deg > 0 && max_zenith_deg <= 90, "max_zenith_deg must be in (0, 90]");
-}
-
-Eigen::Vector3d SunVector(double zenith_deg, double azimuth_deg) {
-  const double z = zenith_deg * kDeg, a = azimuth_deg * kDeg;
-  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
-}
-
-void SunAngles(const Eigen::Vector3d& toward_sun, double* zenith_deg,
-               double* azimuth_deg) {
-  const Eigen::Vector3d d = toward_sun.normalized();
-  *zenith_deg = std::acos(std::clamp(d.z(), -1.0, 1.0)) / kDeg;
-  const double a = std::atan2(d.x(), d.y()) / kDeg;
-  *azimuth_deg = a < 0 ? a + 360.0 : a;
+  Require(max_zenith_deg > 0 && max_zenith_deg <= 90,
+          "max_zenith_deg must be in (0, 90]");
 }
 
 InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
@@ -463,10 +475,12 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
                                     const ProgressCallback& progress) {
   options.Check();
   Require(!frame.empty(), "frame: empty image");
-  Require(frame.type() == CV_32FC1, "frame: expected a single-channel float32 image");
+  Require(frame.type() == CV_32FC1,
+          "frame: expected a single-channel float32 image");
   Require(frame.cols == camera.width() && frame.rows == camera.height(),
-          "frame: size " + std::to_string(frame.cols) + "x" + std::to_string(frame.rows) +
-              " differs from the camera's " + std::to_string(camera.width()) + "x" +
+          "frame: size " + std::to_string(frame.cols) + "x" +
+              std::to_string(frame.rows) + " differs from the camera's " +
+              std::to_string(camera.width()) + "x" +
               std::to_string(camera.height()));
   Require(options.ignore_top_rows + options.ignore_bottom_rows < frame.rows,
           "ignore_top_rows + ignore_bottom_rows leave no rows");
@@ -476,9 +490,10 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
     const Samples s = GatherSamples(scene, camera, frame, options);
     out.num_pixels = s.size();
     if (s.size() < 50) {
-      out.message = "too few usable pixels see the model (" + std::to_string(s.size()) +
-                    "): check that the camera is matched to the footage and the model "
-                    "is in view";
+      out.message =
+          "too few usable pixels see the model (" + std::to_string(s.size()) +
+          "): check that the camera is matched to the footage and the model "
+          "is in view";
       return out;
     }
     int num_objects = 0;
@@ -486,21 +501,25 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
       num_objects = std::max(num_objects, scene.object_id_of_triangle(t) + 1);
     }
     std::vector<float> sorted = s.intensity;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    out.loss_scale_abs = std::max(1e-4, options.loss_scale * sorted[sorted.size() / 2]);
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
+                     sorted.end());
+    out.loss_scale_abs =
+        std::max(1e-4, options.loss_scale * sorted[sorted.size() / 2]);
     out.success = true;
     if (options.method == InitialSunMethod::kThesis) {
       EstimateThesis(scene, s, options, progress, &out);
     } else {
       EstimateDefault(scene, s, options, progress, num_objects, &out);
     }
-    SunAngles(out.sun_in_world, &out.zenith_deg, &out.azimuth_deg);
+    AnglesFromSunInWorld(out.sun_in_world, &out.zenith_deg, &out.azimuth_deg);
     Report(progress, 1.0);
   } catch (const Cancelled&) {
     out = InitialSunResult();
     out.message = "cancelled";
   }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+          .count();
   return out;
 }
 

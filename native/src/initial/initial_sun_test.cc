@@ -10,14 +10,16 @@
 namespace sunlapse {
 namespace {
 
-using testing::AngleDeg;
 using testing::BoxAndPole;
 using testing::Mesh;
 
-Camera LookingDown(int w, int h) { return testing::LookAt({3, -11, 8}, {0, 0, 0}, w, h); }
+Camera LookingDown(int w, int h) {
+  return testing::LookAt({3, -11, 8}, {0, 0, 0}, w, h);
+}
 
-cv::Mat Render(const Scene& scene, const Camera& cam, const Eigen::Vector3d& sun,
-               const std::vector<double>& albedo, double noise) {
+cv::Mat Render(const Scene& scene, const Camera& cam,
+               const Eigen::Vector3d& sun, const std::vector<double>& albedo,
+               double noise) {
   testing::RenderOptions o;
   o.noise = noise;
   o.albedo = [albedo](int id, const Eigen::Vector3f&) { return albedo[id]; };
@@ -33,16 +35,19 @@ class InitialSunRecovers : public ::testing::TestWithParam<SunCase> {};
 TEST_P(InitialSunRecovers, KnownDirectionWithinHalfADegree) {
   const Scene scene = BoxAndPole().Build();
   const Camera cam = LookingDown(320, 240);
-  const Eigen::Vector3d sun = SunVector(GetParam().zenith, GetParam().azimuth);
+  const Eigen::Vector3d sun =
+      SunInWorldFromAngles(GetParam().zenith, GetParam().azimuth);
   const cv::Mat img = Render(scene, cam, sun, {0.35, 0.8, 0.15}, 0.01);
   InitialSunOptions o;
   const InitialSunResult r = EstimateInitialSun(scene, cam, img, o);
   ASSERT_TRUE(r.success) << r.message;
-  const double err = AngleDeg(r.sun_in_world, sun);
-  EXPECT_LT(err, 0.5) << "zenith " << r.zenith_deg << " azimuth " << r.azimuth_deg;
+  const double err = AngleBetweenDeg(r.sun_in_world, sun);
+  EXPECT_LT(err, 0.5) << "zenith " << r.zenith_deg << " azimuth "
+                      << r.azimuth_deg;
   EXPECT_GT(r.confidence, 0.3);
   // Albedo relative to the ground (the object with most pixels).
-  EXPECT_NEAR(r.albedo_per_object[1] / r.albedo_per_object[0], 0.8 / 0.35, 0.15);
+  EXPECT_NEAR(r.albedo_per_object[1] / r.albedo_per_object[0], 0.8 / 0.35,
+              0.15);
 }
 
 INSTANTIATE_TEST_SUITE_P(Directions, InitialSunRecovers,
@@ -51,16 +56,19 @@ INSTANTIATE_TEST_SUITE_P(Directions, InitialSunRecovers,
 
 TEST(InitialSun, ObjectsMissingFromTheModelDoNotDragTheAnswer) {
   Mesh footage = BoxAndPole();
-  footage.Box({-4, 2, 0}, {-3, 3, 1.2f}, 3);  // in the footage, not in the model
+  footage.Box({-4, 2, 0}, {-3, 3, 1.2f},
+              3);  // in the footage, not in the model
   footage.Box({4, 1, 0}, {4.6f, 1.6f, 0.9f}, 3);
   const Scene truth_scene = footage.Build();
   const Scene model = BoxAndPole().Build();
   const Camera cam = LookingDown(320, 240);
-  const Eigen::Vector3d sun = SunVector(50, 150);
-  const cv::Mat img = Render(truth_scene, cam, sun, {0.35, 0.8, 0.15, 0.5}, 0.01);
-  const InitialSunResult r = EstimateInitialSun(model, cam, img, InitialSunOptions());
+  const Eigen::Vector3d sun = SunInWorldFromAngles(50, 150);
+  const cv::Mat img =
+      Render(truth_scene, cam, sun, {0.35, 0.8, 0.15, 0.5}, 0.01);
+  const InitialSunResult r =
+      EstimateInitialSun(model, cam, img, InitialSunOptions());
   ASSERT_TRUE(r.success);
-  EXPECT_LT(AngleDeg(r.sun_in_world, sun), 1.0);
+  EXPECT_LT(AngleBetweenDeg(r.sun_in_world, sun), 1.0);
 }
 
 // An image made by exactly the thesis's model: one of its eight point lights
@@ -73,8 +81,8 @@ TEST(InitialSun, ThesisBaselineRecoversTheLightOfItsOwnModel) {
   const Eigen::Vector3d center = b.center().cast<double>();
   const double radius = 0.5 * b.diagonal().norm();
   const int k = 5;
-  const double az = 2 * M_PI * k / 8, el = M_PI / 4;
-  const Eigen::Vector3d dir(std::cos(el) * std::sin(az), std::cos(el) * std::cos(az), std::sin(el));
+  // The thesis's light k of 8, 45 deg above the horizon.
+  const Eigen::Vector3d dir = SunInWorldFromAngles(45, 360.0 * k / 8);
   const Eigen::Vector3d light = center + radius * dir;
   cv::Mat img(cam.height(), cam.width(), CV_32F, 0.6f);
   for (int y = 0; y < cam.height(); ++y) {
@@ -85,7 +93,9 @@ TEST(InitialSun, ThesisBaselineRecoversTheLightOfItsOwnModel) {
       const Eigen::Vector3f to_light = (light.cast<float>() - o);
       uint8_t occ;
       scene.OccludedToward(1, o.data(), to_light, 0.f, INFINITY, &occ);
-      const double nl = std::max(0.0, h.normal(0).cast<double>().dot(to_light.cast<double>().normalized()));
+      const double nl = std::max(
+          0.0,
+          h.normal(0).cast<double>().dot(to_light.cast<double>().normalized()));
       img.at<float>(y, x) = static_cast<float>(0.1 + 0.5 * nl * (occ ? 0 : 1));
     }
   }
@@ -95,10 +105,11 @@ TEST(InitialSun, ThesisBaselineRecoversTheLightOfItsOwnModel) {
   ASSERT_TRUE(r.success) << r.message;
   ASSERT_EQ(r.light_intensities.size(), 8u);
   for (int i = 0; i < 8; ++i) {
-    EXPECT_NEAR(r.light_intensities[i], i == k ? 0.5 : 0.0, 0.01) << "light " << i;
+    EXPECT_NEAR(r.light_intensities[i], i == k ? 0.5 : 0.0, 0.01)
+        << "light " << i;
   }
   EXPECT_NEAR(r.ambient_intensity, 0.1, 0.01);
-  EXPECT_LT(AngleDeg(r.sun_in_world, dir), 0.5);
+  EXPECT_LT(AngleBetweenDeg(r.sun_in_world, dir), 0.5);
 }
 
 TEST(InitialSun, FlatGroundWithoutShadowsSaysTheAzimuthIsUndetermined) {
@@ -106,8 +117,10 @@ TEST(InitialSun, FlatGroundWithoutShadowsSaysTheAzimuthIsUndetermined) {
   m.Ground(12, 0);
   const Scene scene = m.Build();
   const Camera cam = LookingDown(160, 120);
-  const cv::Mat img = Render(scene, cam, SunVector(40, 90), {0.4}, 0.01);
-  const InitialSunResult r = EstimateInitialSun(scene, cam, img, InitialSunOptions());
+  const cv::Mat img =
+      Render(scene, cam, SunInWorldFromAngles(40, 90), {0.4}, 0.01);
+  const InitialSunResult r =
+      EstimateInitialSun(scene, cam, img, InitialSunOptions());
   EXPECT_FALSE(r.message.empty());
   EXPECT_LT(r.confidence, 0.3);
 }
@@ -115,10 +128,12 @@ TEST(InitialSun, FlatGroundWithoutShadowsSaysTheAzimuthIsUndetermined) {
 TEST(InitialSun, CancelsWhenProgressSaysSo) {
   const Scene scene = BoxAndPole().Build();
   const Camera cam = LookingDown(160, 120);
-  const cv::Mat img = Render(scene, cam, SunVector(40, 200), {0.4, 0.4, 0.4}, 0.0);
+  const cv::Mat img =
+      Render(scene, cam, SunInWorldFromAngles(40, 200), {0.4, 0.4, 0.4}, 0.0);
   int calls = 0;
-  const InitialSunResult r = EstimateInitialSun(scene, cam, img, InitialSunOptions(),
-                                                [&](double) { return ++calls < 3; });
+  const InitialSunResult r =
+      EstimateInitialSun(scene, cam, img, InitialSunOptions(),
+                         [&](double) { return ++calls < 3; });
   EXPECT_FALSE(r.success);
   EXPECT_EQ(r.message, "cancelled");
 }
@@ -126,31 +141,29 @@ TEST(InitialSun, CancelsWhenProgressSaysSo) {
 TEST(InitialSun, RejectsBadInput) {
   const Scene scene = BoxAndPole().Build();
   const Camera cam = LookingDown(160, 120);
-  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(), InitialSunOptions()), std::invalid_argument);
-  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(10, 10, CV_32F, 0.5f), InitialSunOptions()),
+  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(), InitialSunOptions()),
                std::invalid_argument);
-  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(120, 160, CV_8U), InitialSunOptions()),
+  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(10, 10, CV_32F, 0.5f),
+                                  InitialSunOptions()),
+               std::invalid_argument);
+  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(120, 160, CV_8U),
+                                  InitialSunOptions()),
                std::invalid_argument);
   InitialSunOptions o;
   o.loss_scale = 0;
-  EXPECT_THROW(EstimateInitialSun(scene, cam, cv::Mat(120, 160, CV_32F, 0.5f), o),
-               std::invalid_argument);
+  EXPECT_THROW(
+      EstimateInitialSun(scene, cam, cv::Mat(120, 160, CV_32F, 0.5f), o),
+      std::invalid_argument);
   // Nothing of the model in view: a result that says so, not an exception.
   BlenderCameraParams p;
   p.width = 160;
   p.height = 120;
   p.world_from_camera_local(2, 3) = -50;  // under the ground, looking down
-  const InitialSunResult r = EstimateInitialSun(scene, Camera::FromBlender(p),
-                                                cv::Mat(120, 160, CV_32F, 0.5f), InitialSunOptions());
+  const InitialSunResult r =
+      EstimateInitialSun(scene, Camera::FromBlender(p),
+                         cv::Mat(120, 160, CV_32F, 0.5f), InitialSunOptions());
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.message.find("too few"), std::string::npos);
-}
-
-TEST(InitialSun, AnglesRoundTrip) {
-  double z, a;
-  SunAngles(SunVector(33, 287), &z, &a);
-  EXPECT_NEAR(z, 33, 1e-9);
-  EXPECT_NEAR(a, 287, 1e-9);
 }
 
 }  // namespace

@@ -79,8 +79,8 @@ Eigen::Vector2d PolynomialDistortion::Undistort(
           principal_y_px + focal_y_px * yd * s};
 }
 
-Camera::Camera(const Eigen::Matrix3d& K, const Eigen::Isometry3d& cam_from_world,
-               int width, int height)
+Camera::Camera(const Eigen::Matrix3d& K,
+               const Eigen::Isometry3d& cam_from_world, int width, int height)
     : K_(K),
       K_inv_(K.inverse()),
       cam_from_world_(cam_from_world),
@@ -88,7 +88,8 @@ Camera::Camera(const Eigen::Matrix3d& K, const Eigen::Isometry3d& cam_from_world
       width_(width),
       height_(height) {
   Require(width > 0 && height > 0, "width and height must be > 0 pixels");
-  Require(K.allFinite() && std::abs(K.determinant()) > 0, "K must be invertible");
+  Require(K.allFinite() && std::abs(K.determinant()) > 0,
+          "K must be invertible");
 }
 
 Camera Camera::FromBlender(const BlenderCameraParams& p) {
@@ -96,8 +97,9 @@ Camera Camera::FromBlender(const BlenderCameraParams& p) {
   const double W = p.width, H = p.height;
   const double size_x = p.pixel_aspect_x * W, size_y = p.pixel_aspect_y * H;
   // BKE_camera_sensor_size: AUTO and HORIZONTAL use sensor_width.
-  const double sensor = p.sensor_fit == SensorFit::kVertical ? p.sensor_height_mm
-                                                             : p.sensor_width_mm;
+  const double sensor = p.sensor_fit == SensorFit::kVertical
+                            ? p.sensor_height_mm
+                            : p.sensor_width_mm;
   bool horizontal = p.sensor_fit == SensorFit::kHorizontal;
   if (p.sensor_fit == SensorFit::kAuto) horizontal = size_x >= size_y;
   // Pixel height over pixel width, as Blender's ycor.
@@ -121,8 +123,8 @@ Camera Camera::FromBlender(const BlenderCameraParams& p) {
           "parent); apply the scale to the camera");
   // Blender stores matrices in float32: snap to the nearest rotation so that
   // projection and back-projection are exact inverses.
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(axes,
-                                        Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(
+      axes, Eigen::ComputeFullU | Eigen::ComputeFullV);
   axes = svd.matrixU() * svd.matrixV().transpose();
   // Blender camera local (+Y up, looking along -Z) -> OpenCV camera.
   Eigen::Matrix3d world_from_cam_rot;

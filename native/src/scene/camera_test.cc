@@ -11,7 +11,8 @@ namespace {
 Eigen::Matrix4d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& at) {
   // Blender camera local frame: looks along -Z, +Y up.
   const Eigen::Vector3d back = (eye - at).normalized();
-  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
+  const Eigen::Vector3d right =
+      Eigen::Vector3d::UnitZ().cross(back).normalized();
   const Eigen::Vector3d up = back.cross(right);
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   m.block<3, 1>(0, 0) = right;
@@ -88,7 +89,8 @@ TEST(Camera, PixelRayAndProjectionRoundTrip) {
       const Eigen::Vector2d px(u(rng) * 999, u(rng) * 699);
       const Eigen::Vector3d ray = cam.PixelToRayInWorld(px);
       EXPECT_NEAR(ray.norm(), 1.0, 1e-12);
-      const Eigen::Vector3d point = cam.center_in_world() + (1 + 9 * u(rng)) * ray;
+      const Eigen::Vector3d point =
+          cam.center_in_world() + (1 + 9 * u(rng)) * ray;
       Eigen::Vector2d back;
       ASSERT_TRUE(cam.WorldToPixel(point, &back));
       EXPECT_NEAR((back - px).norm(), 0.0, 1e-8);
@@ -119,14 +121,14 @@ TEST(Camera, DistortionRoundTripsAndUndistortsRays) {
   cam.SetDistortion(d);
   const Eigen::Vector2d corner(10, 10);
   Eigen::Vector2d recorded;
-  const Eigen::Vector3d point = ideal_cam.center_in_world() +
-                                5.0 * ideal_cam.PixelToRayInWorld(corner);
+  const Eigen::Vector3d point =
+      ideal_cam.center_in_world() + 5.0 * ideal_cam.PixelToRayInWorld(corner);
   ASSERT_TRUE(cam.WorldToPixel(point, &recorded));
   EXPECT_GT((recorded - corner).norm(), 1.0);  // barrel moves it inward
-  EXPECT_NEAR((cam.PixelToRayInWorld(recorded) -
-               ideal_cam.PixelToRayInWorld(corner))
-                  .norm(),
-              0.0, 1e-9);
+  EXPECT_NEAR(
+      (cam.PixelToRayInWorld(recorded) - ideal_cam.PixelToRayInWorld(corner))
+          .norm(),
+      0.0, 1e-9);
 }
 
 TEST(Camera, RejectsBadParametersNamingThem) {

@@ -24,13 +24,20 @@ void Require(bool ok, const std::string& message) {
 
 std::string EmbreeErrorName(RTCError e) {
   switch (e) {
-    case RTC_ERROR_NONE: return "none";
-    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-    case RTC_ERROR_CANCELLED: return "cancelled";
-    default: return "unknown";
+    case RTC_ERROR_NONE:
+      return "none";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown";
   }
 }
 
@@ -43,7 +50,8 @@ bool ValidRay(const float* o, const float* d, float* norm) {
 }
 
 // A ray query from o along unit direction d (Embree's fields in one place).
-RTCRayHit MakeRayHit(const float o[3], const float d[3], float t_near, float t_far) {
+RTCRayHit MakeRayHit(const float o[3], const float d[3], float t_near,
+                     float t_far) {
   RTCRayHit rh;
   rh.ray.org_x = o[0];
   rh.ray.org_y = o[1];
@@ -80,7 +88,7 @@ struct Scene::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::vector<int32_t> object_ids;
-  std::vector<float> vertices;     // copies, for callers that need the mesh
+  std::vector<float> vertices;  // copies, for callers that need the mesh
   std::vector<int32_t> triangles;
   int64_t num_vertices = 0;
   Eigen::AlignedBox3f bounds;
@@ -163,8 +171,8 @@ Scene::Scene(const float* vertices, int64_t num_vertices,
   Eigen::AlignedBox3f bounds;
   for (int64_t v = 0; v < num_vertices; ++v) {
     const Eigen::Vector3f p(vertices + 3 * v);
-    Require(p.allFinite(), "vertices: vertex " + std::to_string(v) +
-                               " is not finite");
+    Require(p.allFinite(),
+            "vertices: vertex " + std::to_string(v) + " is not finite");
     bounds.extend(p);
   }
   for (int64_t t = 0; t < num_triangles; ++t) {
@@ -175,8 +183,8 @@ Scene::Scene(const float* vertices, int64_t num_vertices,
                   std::to_string(t) + " is out of range [0, " +
                   std::to_string(num_vertices) + ")");
     }
-    Require(object_ids[t] >= 0, "object_ids: id of triangle " +
-                                    std::to_string(t) + " is negative");
+    Require(object_ids[t] >= 0,
+            "object_ids: id of triangle " + std::to_string(t) + " is negative");
   }
 
   Impl& s = *impl_;
@@ -193,9 +201,9 @@ Scene::Scene(const float* vertices, int64_t num_vertices,
   auto* vbuf = static_cast<float*>(rtcSetNewGeometryBuffer(
       geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
       num_vertices));
-  auto* ibuf = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-      geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-      num_triangles));
+  auto* ibuf = static_cast<uint32_t*>(
+      rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                              3 * sizeof(uint32_t), num_triangles));
   if (!vbuf || !ibuf) {
     rtcReleaseGeometry(geom);
     s.CheckDevice("buffer allocation");
@@ -238,8 +246,7 @@ Scene::Scene(const std::vector<Eigen::Vector3f>& vertices,
              const std::vector<Eigen::Vector3i>& triangles,
              const std::vector<int32_t>& object_ids)
     : Scene(Flatten3(vertices).data(), static_cast<int64_t>(vertices.size()),
-            Flatten3i(triangles).data(),
-            static_cast<int64_t>(triangles.size()),
+            Flatten3i(triangles).data(), static_cast<int64_t>(triangles.size()),
             (Require(object_ids.size() == triangles.size(),
                      "object_ids: need one per triangle"),
              object_ids.data())) {}
@@ -338,37 +345,38 @@ void OccludedBatch(RTCScene scene, int64_t n, const float* origins,
                    uint8_t* occluded) {
   Require(n >= 0, "n must be >= 0");
   Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
-  tbb::parallel_for(
-      tbb::blocked_range<int64_t>(0, n, kGrain),
-      [&](const tbb::blocked_range<int64_t>& r) {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        if (coherent) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        for (int64_t i = r.begin(); i < r.end(); ++i) {
-          const float* o = origins + 3 * i;
-          const float* d = dir_at(i);
-          float norm;
-          if (!ValidRay(o, d, &norm)) {
-            occluded[i] = 0;
-            continue;
-          }
-          RTCRay ray;
-          ray.org_x = o[0];
-          ray.org_y = o[1];
-          ray.org_z = o[2];
-          ray.dir_x = d[0] / norm;
-          ray.dir_y = d[1] / norm;
-          ray.dir_z = d[2] / norm;
-          ray.tnear = t_near;
-          ray.tfar = t_far;
-          ray.time = 0.f;
-          ray.mask = 0xFFFFFFFFu;
-          ray.id = 0;
-          ray.flags = 0;
-          rtcOccluded1(scene, &ctx, &ray);
-          occluded[i] = ray.tfar < 0 ? 1 : 0;  // Embree sets -inf on a hit
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, n, kGrain),
+                    [&](const tbb::blocked_range<int64_t>& r) {
+                      RTCIntersectContext ctx;
+                      rtcInitIntersectContext(&ctx);
+                      if (coherent)
+                        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+                      for (int64_t i = r.begin(); i < r.end(); ++i) {
+                        const float* o = origins + 3 * i;
+                        const float* d = dir_at(i);
+                        float norm;
+                        if (!ValidRay(o, d, &norm)) {
+                          occluded[i] = 0;
+                          continue;
+                        }
+                        RTCRay ray;
+                        ray.org_x = o[0];
+                        ray.org_y = o[1];
+                        ray.org_z = o[2];
+                        ray.dir_x = d[0] / norm;
+                        ray.dir_y = d[1] / norm;
+                        ray.dir_z = d[2] / norm;
+                        ray.tnear = t_near;
+                        ray.tfar = t_far;
+                        ray.time = 0.f;
+                        ray.mask = 0xFFFFFFFFu;
+                        ray.id = 0;
+                        ray.flags = 0;
+                        rtcOccluded1(scene, &ctx, &ray);
+                        occluded[i] =
+                            ray.tfar < 0 ? 1 : 0;  // Embree sets -inf on a hit
+                      }
+                    });
 }
 }  // namespace
 
@@ -419,7 +427,9 @@ void Scene::OccludedToward(int64_t n, const float* origins,
             const int64_t i = base + k;
             const float* o = origins + 3 * std::min(i, n - 1);
             valid[k] = (i < n && std::isfinite(o[0]) && std::isfinite(o[1]) &&
-                        std::isfinite(o[2])) ? -1 : 0;
+                        std::isfinite(o[2]))
+                           ? -1
+                           : 0;
             rays.org_x[k] = valid[k] ? o[0] : 0.f;
             rays.org_y[k] = valid[k] ? o[1] : 0.f;
             rays.org_z[k] = valid[k] ? o[2] : 0.f;

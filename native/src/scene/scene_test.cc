@@ -12,8 +12,8 @@ namespace {
 // Ground plane z = 0 over [-10, 10]^2 (object 0) and a 2 x 2 x 2 box standing
 // on it at the origin (object 1).
 Scene BoxOnPlane() {
-  std::vector<Eigen::Vector3f> v = {{-10, -10, 0}, {10, -10, 0}, {10, 10, 0},
-                                    {-10, 10, 0}};
+  std::vector<Eigen::Vector3f> v = {
+      {-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}};
   std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
   std::vector<int32_t> ids = {0, 0};
   const int b = static_cast<int>(v.size());
@@ -70,7 +70,8 @@ TEST(Scene, CameraPixelsHitWhatTheyProjectFrom) {
   // Camera 12 m south, 8 m up, looking at the origin.
   const Eigen::Vector3d eye(0, -12, 8);
   const Eigen::Vector3d back = eye.normalized();
-  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
+  const Eigen::Vector3d right =
+      Eigen::Vector3d::UnitZ().cross(back).normalized();
   p.world_from_camera_local.block<3, 1>(0, 0) = right;
   p.world_from_camera_local.block<3, 1>(0, 1) = back.cross(right);
   p.world_from_camera_local.block<3, 1>(0, 2) = back;

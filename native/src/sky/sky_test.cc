@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <random>
 
+#include "sunlapse/common/angles.h"
 #include "sunlapse/sky/sky_evidence.h"
 #include "sunlapse/sky/sun_path.h"
 #include "synthetic.h"
@@ -11,11 +12,8 @@
 namespace sunlapse {
 namespace {
 
-using testing::AngleDeg;
-
 Eigen::Vector3d Sun(double zenith, double azimuth) {
-  const double z = zenith * M_PI / 180, a = azimuth * M_PI / 180;
-  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
+  return SunInWorldFromAngles(zenith, azimuth);
 }
 
 // The Sun's path over a clip: zenith 55 -> 35 deg, azimuth 110 -> 160.
@@ -82,7 +80,7 @@ TEST(SkyEvidence, BestDirectionOfEachFrameIsNearTheTrueSunDespiteAGradient) {
     const FrameEvidence e = ev.AddFrame(clip.frames[f]);
     ASSERT_EQ(e.status, FrameEvidence::Status::kOk) << e.message;
     const double error =
-        AngleDeg(ev.grid().direction(e.best_direction), clip.truth[f]);
+        AngleBetweenDeg(ev.grid().direction(e.best_direction), clip.truth[f]);
     EXPECT_LT(error, tolerance) << "frame " << f;
     EXPECT_GT(e.best_explained, 0.1) << "frame " << f;
     EXPECT_GT(e.margin, 2.0) << "frame " << f;
@@ -124,7 +122,7 @@ TEST(SkyEvidence, BlackAndMissingFramesAreReportedNotScored) {
 
 double PathError(const SkyEvidence& ev, const SunPathResult& path,
                  const std::vector<Eigen::Vector3d>& truth, size_t t) {
-  return AngleDeg(ev.grid().direction(path.direction[t]), truth[t]);
+  return AngleBetweenDeg(ev.grid().direction(path.direction[t]), truth[t]);
 }
 
 TEST(SunPath, BrokenFramesAreCarriedByTheirNeighbours) {

@@ -11,7 +11,8 @@ namespace sunlapse::testing {
 void Mesh::Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int id) {
   const int b = static_cast<int>(v.size());
   for (int i = 0; i < 8; ++i) {
-    v.emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
+    v.emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(),
+                   (i & 4) ? hi.z() : lo.z());
   }
   const int q[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
                        {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
@@ -24,7 +25,9 @@ void Mesh::Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int id) {
 
 void Mesh::Ground(float half, int id) {
   const int b = static_cast<int>(v.size());
-  v.insert(v.end(), {{-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}});
+  v.insert(
+      v.end(),
+      {{-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}});
   t.emplace_back(b, b + 1, b + 2);
   t.emplace_back(b, b + 2, b + 3);
   ids.insert(ids.end(), {id, id});
@@ -47,14 +50,15 @@ Mesh BenchScene() {
 
 Camera BenchCamera() { return LookAt({3, -11, 8}, {0, 0, 0}, 1920, 1080); }
 
-Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int width,
-              int height, double lens_mm) {
+Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+              int width, int height, double lens_mm) {
   BlenderCameraParams p;
   p.width = width;
   p.height = height;
   p.lens_mm = lens_mm;
   const Eigen::Vector3d back = (eye - target).normalized();
-  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
+  const Eigen::Vector3d right =
+      Eigen::Vector3d::UnitZ().cross(back).normalized();
   p.world_from_camera_local.block<3, 1>(0, 0) = right;
   p.world_from_camera_local.block<3, 1>(0, 1) = back.cross(right);
   p.world_from_camera_local.block<3, 1>(0, 2) = back;
@@ -62,8 +66,8 @@ Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int wid
   return Camera::FromBlender(p);
 }
 
-cv::Mat RenderLambertian(const Scene& scene, const Camera& cam, const Eigen::Vector3d& sun,
-                         const RenderOptions& o) {
+cv::Mat RenderLambertian(const Scene& scene, const Camera& cam,
+                         const Eigen::Vector3d& sun, const RenderOptions& o) {
   if (o.supersample > 1) {
     // Render k times larger without noise, average k x k blocks, add noise.
     const int k = o.supersample;
@@ -72,12 +76,14 @@ cv::Mat RenderLambertian(const Scene& scene, const Camera& cam, const Eigen::Vec
     K.row(1) *= k;
     K(0, 2) = (cam.K()(0, 2) + 0.5) * k - 0.5;
     K(1, 2) = (cam.K()(1, 2) + 0.5) * k - 0.5;
-    const Camera big(K, cam.cam_from_world(), cam.width() * k, cam.height() * k);
+    const Camera big(K, cam.cam_from_world(), cam.width() * k,
+                     cam.height() * k);
     RenderOptions clean = o;
     clean.supersample = 1;
     clean.noise = 0;
     cv::Mat hi = RenderLambertian(scene, big, sun, clean), img;
-    cv::resize(hi, img, cv::Size(cam.width(), cam.height()), 0, 0, cv::INTER_AREA);
+    cv::resize(hi, img, cv::Size(cam.width(), cam.height()), 0, 0,
+               cv::INTER_AREA);
     if (o.noise > 0) {
       cv::Mat noise(img.size(), CV_32F);
       cv::RNG rng(o.seed);
@@ -97,30 +103,30 @@ cv::Mat RenderLambertian(const Scene& scene, const Camera& cam, const Eigen::Vec
   scene.IntersectPixels(cam, n, px.data(), hits.buffers());
   std::vector<float> origins(3 * n, 0.f);
   for (int64_t i = 0; i < n; ++i) {
-    const Eigen::Vector3f p = hits.hit(i) ? Eigen::Vector3f(hits.point(i) + 1e-3f * hits.normal(i))
-                                          : Eigen::Vector3f(0, 0, -1e4f);
+    const Eigen::Vector3f p =
+        hits.hit(i) ? Eigen::Vector3f(hits.point(i) + 1e-3f * hits.normal(i))
+                    : Eigen::Vector3f(0, 0, -1e4f);
     for (int k = 0; k < 3; ++k) origins[3 * i + k] = p[k];
   }
   std::vector<uint8_t> occ(n);
-  scene.OccludedToward(n, origins.data(), sun.normalized().cast<float>(), 0.f, INFINITY, occ.data());
+  scene.OccludedToward(n, origins.data(), sun.normalized().cast<float>(), 0.f,
+                       INFINITY, occ.data());
   std::mt19937 rng(o.seed);
   std::normal_distribution<float> gauss(0.f, static_cast<float>(o.noise));
   cv::Mat img(h, w, CV_32F);
   for (int64_t i = 0; i < n; ++i) {
     float value = o.sky;
     if (hits.hit(i)) {
-      const double nl = std::max(0.0, hits.normal(i).cast<double>().dot(sun.normalized()));
+      const double nl =
+          std::max(0.0, hits.normal(i).cast<double>().dot(sun.normalized()));
       const double rho = o.albedo(hits.object_id[i], hits.point(i));
-      value = static_cast<float>(rho * (o.ambient + o.sun * nl * (occ[i] ? 0 : 1)));
+      value =
+          static_cast<float>(rho * (o.ambient + o.sun * nl * (occ[i] ? 0 : 1)));
     }
     img.at<float>(static_cast<int>(i / w), static_cast<int>(i % w)) =
         std::clamp(value + (o.noise > 0 ? gauss(rng) : 0.f), 0.f, 1.f);
   }
   return img;
-}
-
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
 }
 
 }  // namespace sunlapse::testing

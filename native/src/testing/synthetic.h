@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "sunlapse/common/angles.h"
 #include "sunlapse/scene/camera.h"
 #include "sunlapse/scene/scene.h"
 
@@ -33,14 +34,14 @@ Mesh BenchScene();
 Camera BenchCamera();
 
 // A Blender-style camera at `eye` looking at `target` (+Z up).
-Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int width,
-              int height, double lens_mm = 24.0);
+Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+              int width, int height, double lens_mm = 24.0);
 
 struct RenderOptions {
-  double ambient = 0.08;   // times albedo
-  double sun = 0.7;        // times albedo x max(0, N.L) x visible
-  double noise = 0.01;     // Gaussian, intensity units
-  float sky = 0.6f;        // where no model is seen
+  double ambient = 0.08;  // times albedo
+  double sun = 0.7;       // times albedo x max(0, N.L) x visible
+  double noise = 0.01;    // Gaussian, intensity units
+  float sky = 0.6f;       // where no model is seen
   uint32_t seed = 1;
   // Rays per pixel along each axis, averaged: a sensor integrates over the
   // pixel's area (1 = point sampling at pixel centres).
@@ -53,9 +54,7 @@ struct RenderOptions {
 // I = albedo (ambient + sun max(0, N.L) visible) + noise, clamped to [0, 1];
 // CV_32F of the camera's size.
 cv::Mat RenderLambertian(const Scene& scene, const Camera& camera,
-                         const Eigen::Vector3d& toward_sun, const RenderOptions& options);
-
-// Angle between two directions, degrees.
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+                         const Eigen::Vector3d& toward_sun,
+                         const RenderOptions& options);
 
 }  // namespace sunlapse::testing

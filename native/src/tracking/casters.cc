@@ -5,7 +5,8 @@
 
 namespace sunlapse::internal {
 
-std::vector<Caster> FindCasters(const Scene& scene, const std::vector<int32_t>& ground_ids) {
+std::vector<Caster> FindCasters(const Scene& scene,
+                                const std::vector<int32_t>& ground_ids) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
   std::vector<float> top(0), bottom(0);
   std::vector<std::vector<int64_t>> verts;
@@ -31,7 +32,8 @@ std::vector<Caster> FindCasters(const Scene& scene, const std::vector<int32_t>& 
     Caster c{{}, bottom[id], id};
     const float level = top[id] - 1e-3f * std::max(1.f, top[id] - bottom[id]);
     std::sort(verts[id].begin(), verts[id].end());
-    verts[id].erase(std::unique(verts[id].begin(), verts[id].end()), verts[id].end());
+    verts[id].erase(std::unique(verts[id].begin(), verts[id].end()),
+                    verts[id].end());
     for (int64_t v : verts[id]) {
       const Eigen::Vector3f p = scene.vertex(v);
       if (p.z() >= level) c.tops.push_back(p);
@@ -41,16 +43,19 @@ std::vector<Caster> FindCasters(const Scene& scene, const std::vector<int32_t>& 
   return out;
 }
 
-bool ShadowTip(const Scene& scene, const Caster& c, const Eigen::Vector3d& toward_sun,
+bool ShadowTip(const Scene& scene, const Caster& c,
+               const Eigen::Vector3d& toward_sun,
                const std::vector<int32_t>& ground_ids, Eigen::Vector3f* top,
                Eigen::Vector3f* tip) {
-  const float d[3] = {static_cast<float>(-toward_sun.x()), static_cast<float>(-toward_sun.y()),
+  const float d[3] = {static_cast<float>(-toward_sun.x()),
+                      static_cast<float>(-toward_sun.y()),
                       static_cast<float>(-toward_sun.z())};
   double longest = -1;
   for (const Eigen::Vector3f& p : c.tops) {
     const float o[3] = {p.x(), p.y(), p.z()};
     Hits hit(1);
-    scene.Intersect(1, o, d, 1e-3f, std::numeric_limits<float>::infinity(), hit.buffers());
+    scene.Intersect(1, o, d, 1e-3f, std::numeric_limits<float>::infinity(),
+                    hit.buffers());
     if (!hit.hit(0) || !IsGround(ground_ids, hit.object_id[0])) continue;
     const double length = (hit.point(0) - c.FootBelow(p)).norm();
     if (length > longest) {

@@ -23,16 +23,19 @@ struct Caster {
 };
 
 inline bool IsGround(const std::vector<int32_t>& ground_ids, int32_t id) {
-  return std::find(ground_ids.begin(), ground_ids.end(), id) != ground_ids.end();
+  return std::find(ground_ids.begin(), ground_ids.end(), id) !=
+         ground_ids.end();
 }
 
-std::vector<Caster> FindCasters(const Scene& scene, const std::vector<int32_t>& ground_ids);
+std::vector<Caster> FindCasters(const Scene& scene,
+                                const std::vector<int32_t>& ground_ids);
 
 // The tip of the caster's shadow on the ground toward the Sun `toward_sun`:
 // of its top vertices, the one whose shadow lands on the ground furthest from
 // the caster (the outer corner; the others' rays may clip the caster itself).
 // Writes that vertex to *top and its shadow to *tip; false if none lands.
-bool ShadowTip(const Scene& scene, const Caster& caster, const Eigen::Vector3d& toward_sun,
+bool ShadowTip(const Scene& scene, const Caster& caster,
+               const Eigen::Vector3d& toward_sun,
                const std::vector<int32_t>& ground_ids, Eigen::Vector3f* top,
                Eigen::Vector3f* tip);
 

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "casters.h"
+#include "sunlapse/common/angles.h"
 #include "sunlapse/common/robust_fit.h"
 
 namespace sunlapse {
@@ -30,19 +31,16 @@ void Require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }
 
-void AnglesOf(const Eigen::Vector3d& d, double* zenith, double* azimuth) {
-  *zenith = std::acos(std::clamp(d.z(), -1.0, 1.0)) / kDeg;
-  const double a = std::atan2(d.x(), d.y()) / kDeg;
-  *azimuth = a < 0 ? a + 360.0 : a;
-}
-
 }  // namespace
 
 void ShadowTrackerOptions::Check() const {
-  Require(!ground_object_ids.empty(), "ground_object_ids: name at least one ground object");
-  Require(band_radius_px >= 1 && band_radius_px <= 50, "band_radius_px must be in [1, 50]");
+  Require(!ground_object_ids.empty(),
+          "ground_object_ids: name at least one ground object");
+  Require(band_radius_px >= 1 && band_radius_px <= 50,
+          "band_radius_px must be in [1, 50]");
   Require(max_band_pixels >= 100, "max_band_pixels must be >= 100");
-  Require(search_step_deg > 0 && tolerance_deg > 0 && tolerance_deg <= search_step_deg,
+  Require(search_step_deg > 0 && tolerance_deg > 0 &&
+              tolerance_deg <= search_step_deg,
           "need 0 < tolerance_deg <= search_step_deg");
   Require(loss_scale > 0, "loss_scale must be > 0");
   Require(min_contrast >= 0, "min_contrast must be >= 0");
@@ -58,37 +56,39 @@ struct ShadowTracker::Impl {
   int W = 0, H = 0;
 
   // The ground as the camera sees it, one entry per ground pixel.
-  cv::Mat1i ground_index;              // H x W, -1 elsewhere
+  cv::Mat1i ground_index;  // H x W, -1 elsewhere
   // Everything a ground pixel needs in one cache line: the band's pixels
   // are scattered over the frame, and separate arrays cost a miss each.
   struct GroundPixel {
-    Eigen::Vector3f origin = Eigen::Vector3f::Zero();  // lifted along the normal
+    Eigen::Vector3f origin =
+        Eigen::Vector3f::Zero();  // lifted along the normal
     Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
-    Eigen::Vector3f dpdx = Eigen::Vector3f::Zero();    // ground point per pixel step
+    Eigen::Vector3f dpdx =
+        Eigen::Vector3f::Zero();  // ground point per pixel step
     Eigen::Vector3f dpdy = Eigen::Vector3f::Zero();
-    float albedo = 1.f;                // relative, median 1
+    float albedo = 1.f;  // relative, median 1
     cv::Point px;
   };
   std::vector<GroundPixel> ground;
   std::vector<internal::Caster> casters;
 
-  bool mapped = false;                 // ground and casters made (once)
+  bool mapped = false;  // ground and casters made (once)
 
   // Tracking state.
   bool initialized = false;
-  Eigen::Vector3d sun, sun_before;     // last two accepted Suns
+  Eigen::Vector3d sun, sun_before;  // last two accepted Suns
   bool have_velocity = false;
   int lost = 0;
-  double last_correction_deg = 0.5;    // |found - predicted| on the last frame
-  std::vector<int> band;               // ground indices near shadow boundaries
-  std::vector<int> boundary;           // ground indices on a lit/shadow boundary
+  double last_correction_deg = 0.5;  // |found - predicted| on the last frame
+  std::vector<int> band;             // ground indices near shadow boundaries
+  std::vector<int> boundary;         // ground indices on a lit/shadow boundary
   // Where the shadow edge comes from: for (a sample of) the shadowed side of
   // the boundary, the point of the caster its ray to the Sun hits. Moving
   // the Sun moves the edge to where those points' shadows land.
   std::vector<Eigen::Vector3f> edge_caster;
-  std::vector<int> edge_ground;        // the ground pixel each was found from
+  std::vector<int> edge_ground;  // the ground pixel each was found from
   int frames_since_refresh = 0;
-  int band_core = 0;                   // band[0, band_core) lie by a boundary
+  int band_core = 0;  // band[0, band_core) lie by a boundary
   // Scratch per ground pixel, valid where its tag equals the current epoch.
   std::vector<int> tag, slot;
   int epoch = 0;
@@ -104,7 +104,9 @@ struct ShadowTracker::Impl {
   Impl(const Scene& s, const Camera& c, const ShadowTrackerOptions& opt)
       : scene(s), camera(c), o(opt), W(c.width()), H(c.height()) {}
 
-  bool IsGround(int32_t id) const { return internal::IsGround(o.ground_object_ids, id); }
+  bool IsGround(int32_t id) const {
+    return internal::IsGround(o.ground_object_ids, id);
+  }
 
   void MapGround() {
     ground_index = cv::Mat1i(H, W, -1);
@@ -119,7 +121,8 @@ struct ShadowTracker::Impl {
     const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
     for (int64_t i = 0; i < n; ++i) {
       if (!hits.hit(i) || !IsGround(hits.object_id[i])) continue;
-      const int x = static_cast<int>(px[2 * i]), y = static_cast<int>(px[2 * i + 1]);
+      const int x = static_cast<int>(px[2 * i]),
+                y = static_cast<int>(px[2 * i + 1]);
       ground_index(y, x) = static_cast<int>(ground.size());
       GroundPixel gp;
       gp.px = cv::Point(x, y);
@@ -154,13 +157,15 @@ struct ShadowTracker::Impl {
   }
 
   // Lit flags of ground indices `ids` toward d (1 lit, 0 shadow).
-  std::vector<uint8_t> LitOf(const std::vector<int>& ids, const Eigen::Vector3f& d) {
+  std::vector<uint8_t> LitOf(const std::vector<int>& ids,
+                             const Eigen::Vector3f& d) {
     std::vector<float> org(3 * ids.size());
     for (size_t i = 0; i < ids.size(); ++i) {
       for (int k = 0; k < 3; ++k) org[3 * i + k] = ground[ids[i]].origin[k];
     }
     std::vector<uint8_t> occ(ids.size());
-    scene.OccludedToward(static_cast<int64_t>(ids.size()), org.data(), d, 0.f, kInf, occ.data());
+    scene.OccludedToward(static_cast<int64_t>(ids.size()), org.data(), d, 0.f,
+                         kInf, occ.data());
     rays_cast += static_cast<int64_t>(ids.size());
     for (auto& v : occ) v = !v;
     return occ;
@@ -202,7 +207,8 @@ struct ShadowTracker::Impl {
   std::vector<int> Ring(const std::vector<int>& centers, int r) {
     ++epoch;
     std::vector<int> out;
-    const int offsets[8][2] = {{r, 0}, {-r, 0}, {0, r}, {0, -r}, {r, r}, {-r, -r}, {r, -r}, {-r, r}};
+    const int offsets[8][2] = {{r, 0}, {-r, 0},  {0, r},  {0, -r},
+                               {r, r}, {-r, -r}, {r, -r}, {-r, r}};
     for (int c : centers) {
       const cv::Point p = ground[c].px;
       for (const auto& dxy : offsets) AddOnce(p.x + dxy[0], p.y + dxy[1], &out);
@@ -216,8 +222,9 @@ struct ShadowTracker::Impl {
   // pixels seed the band as the fit will sample (LoadBand keeps at most
   // max_band_pixels of it), every so many along the boundary.
   // `shadowed` (optional) receives the boundary pixels on the shadow side.
-  std::vector<int> BandAround(const std::vector<int>& candidates, const Eigen::Vector3f& d,
-                              bool thin = false, std::vector<int>* shadowed = nullptr) {
+  std::vector<int> BandAround(const std::vector<int>& candidates,
+                              const Eigen::Vector3f& d, bool thin = false,
+                              std::vector<int>* shadowed = nullptr) {
     boundary.clear();
     if (shadowed) shadowed->clear();
     if (candidates.empty()) return {};
@@ -260,12 +267,15 @@ struct ShadowTracker::Impl {
     const size_t outer_stride =
         thin ? std::max<size_t>(1, 2 * boundary.size() / budget) : 1;
     std::vector<int> seeds;
-    for (size_t i = 0; i < boundary.size(); i += core_stride) seeds.push_back(boundary[i]);
+    for (size_t i = 0; i < boundary.size(); i += core_stride)
+      seeds.push_back(boundary[i]);
     std::vector<int> core = Window(seeds, 1);
     const int core_epoch = epoch;
     seeds.clear();
-    for (size_t i = 0; i < boundary.size(); i += outer_stride) seeds.push_back(boundary[i]);
-    std::vector<int> band = thin ? Ring(seeds, o.band_radius_px) : Window(seeds, o.band_radius_px);
+    for (size_t i = 0; i < boundary.size(); i += outer_stride)
+      seeds.push_back(boundary[i]);
+    std::vector<int> band =
+        thin ? Ring(seeds, o.band_radius_px) : Window(seeds, o.band_radius_px);
     band_core = static_cast<int>(core.size());
     for (int g : core) tag[g] = core_epoch;  // mark the core again
     std::vector<int> ordered = core;
@@ -277,7 +287,8 @@ struct ShadowTracker::Impl {
 
   // Records which caster point casts each of (a sample of) the shadowed
   // boundary pixels toward d.
-  void FindEdgeCasters(const std::vector<int>& shadowed, const Eigen::Vector3d& d) {
+  void FindEdgeCasters(const std::vector<int>& shadowed,
+                       const Eigen::Vector3d& d) {
     edge_caster.clear();
     edge_ground.clear();
     const int stride = (static_cast<int>(shadowed.size()) + 599) / 600;
@@ -316,7 +327,8 @@ struct ShadowTracker::Impl {
       const Eigen::Vector3f p = q - ((q - ground[g].origin).dot(n) / dn) * df;
       Eigen::Vector2d px;
       if (!camera.WorldToPixel(p.cast<double>(), &px)) continue;
-      AddOnce(static_cast<int>(std::lround(px.x())), static_cast<int>(std::lround(px.y())), &out);
+      AddOnce(static_cast<int>(std::lround(px.x())),
+              static_cast<int>(std::lround(px.y())), &out);
     }
     return out;
   }
@@ -324,7 +336,8 @@ struct ShadowTracker::Impl {
   std::vector<int> AllGround(int stride) const {
     std::vector<int> out;
     for (int g = 0; g < static_cast<int>(ground.size()); ++g) {
-      if (ground[g].px.x % stride == 0 && ground[g].px.y % stride == 0) out.push_back(g);
+      if (ground[g].px.x % stride == 0 && ground[g].px.y % stride == 0)
+        out.push_back(g);
     }
     return out;
   }
@@ -354,7 +367,8 @@ struct ShadowTracker::Impl {
     const size_t m = picked.size();
     for (size_t i = 0; i < m; ++i) {
       if (i + 16 < m) __builtin_prefetch(&ground[picked[i + 16]]);
-      if (i + 8 < m) __builtin_prefetch(&frame.at<float>(ground[picked[i + 8]].px));
+      if (i + 8 < m)
+        __builtin_prefetch(&frame.at<float>(ground[picked[i + 8]].px));
       const GroundPixel& gp = ground[picked[i]];
       for (int sy = 0; sy < k; ++sy) {
         for (int sx = 0; sx < k; ++sx) {
@@ -374,7 +388,8 @@ struct ShadowTracker::Impl {
   double Cost(const Eigen::Vector3d& toward_sun, double scale) {
     const Eigen::Vector3f d = toward_sun.cast<float>();
     const int rays = static_cast<int>(occluded.size());
-    scene.OccludedToward(rays, band_origin.data(), d, 0.f, kInf, occluded.data());
+    scene.OccludedToward(rays, band_origin.data(), d, 0.f, kInf,
+                         occluded.data());
     rays_cast += rays;
     ++evaluations;
     const int per_pixel = o.subsamples * o.subsamples;
@@ -385,7 +400,8 @@ struct ShadowTracker::Impl {
       band_x[i] = lit * std::max(0.f, band_normal[i].dot(d)) / per_pixel;
     }
     const int n = static_cast<int>(band_y.size());
-    RobustAffineFit(n, band_x.data(), band_y.data(), nullptr, 1, scale, 3, &fit);
+    RobustAffineFit(n, band_x.data(), band_y.data(), nullptr, 1, scale, 3,
+                    &fit);
     return fit.cost;
   }
 
@@ -400,14 +416,16 @@ struct ShadowTracker::Impl {
   // first steps (at least search_step_deg each) from `start`; *escaped says
   // it wanted to go further (the shadows are not where the band looks: a
   // re-acquisition's job).
-  Eigen::Vector3d Search(const Eigen::Vector3d& start, double step_deg, double scale,
-                         bool* escaped) {
+  Eigen::Vector3d Search(const Eigen::Vector3d& start, double step_deg,
+                         double scale, bool* escaped) {
     *escaped = false;
     Eigen::Vector3d e1 = start.cross(Eigen::Vector3d::UnitZ());
     if (e1.norm() < 1e-6) e1 = Eigen::Vector3d::UnitX();
     e1.normalize();
     const Eigen::Vector3d e2 = start.cross(e1).normalized();
-    auto at = [&](const Eigen::Vector2d& c) { return (start + c.x() * e1 + c.y() * e2).normalized(); };
+    auto at = [&](const Eigen::Vector2d& c) {
+      return (start + c.x() * e1 + c.y() * e2).normalized();
+    };
     AffineFit best_fit;
     Eigen::Vector2d uv(0, 0);
     double best = Cost(start, scale);
@@ -424,12 +442,14 @@ struct ShadowTracker::Impl {
         }
       }
       const Eigen::Vector3d d = at(c);
-      *cost_out = d.z() <= 0.01 ? std::numeric_limits<double>::infinity() : Cost(d, scale);
+      *cost_out = d.z() <= 0.01 ? std::numeric_limits<double>::infinity()
+                                : Cost(d, scale);
       scored.emplace_back(c, *cost_out);
       return std::isfinite(*cost_out);
     };
     double h = step_deg * kDeg;
-    const double max_walk = kMaxWalkSteps * std::max(h, o.search_step_deg * kDeg);
+    const double max_walk =
+        kMaxWalkSteps * std::max(h, o.search_step_deg * kDeg);
     Eigen::Vector2d last_move = Eigen::Vector2d::Zero();
     int guard = 0;
     while (h > o.tolerance_deg * kDeg && guard++ < 100) {
@@ -446,17 +466,21 @@ struct ShadowTracker::Impl {
         step[axis] = h;
         double cp, cm;
         consider(center + step, &cp);
-        if (cp < pick_cost) pick_cost = cp, pick = center + step, best_fit = fit;
+        if (cp < pick_cost)
+          pick_cost = cp, pick = center + step, best_fit = fit;
         consider(center - step, &cm);
-        if (cm < pick_cost) pick_cost = cm, pick = center - step, best_fit = fit;
+        if (cm < pick_cost)
+          pick_cost = cm, pick = center - step, best_fit = fit;
         const double curvature = cp + cm - 2 * c0;
         if (std::isfinite(curvature) && curvature > 0) {
           proposal[axis] += std::clamp(0.5 * h * (cm - cp) / curvature, -h, h);
         }
       }
-      if ((proposal - center).norm() > 0.05 * h && (proposal - pick).norm() > 0.05 * h) {
+      if ((proposal - center).norm() > 0.05 * h &&
+          (proposal - pick).norm() > 0.05 * h) {
         double cq;
-        if (consider(proposal, &cq) && cq < pick_cost) {  // fresh, so fit is its own
+        if (consider(proposal, &cq) &&
+            cq < pick_cost) {  // fresh, so fit is its own
           pick_cost = cq, pick = proposal, best_fit = fit;
         }
       }
@@ -472,7 +496,8 @@ struct ShadowTracker::Impl {
         h *= kShrink;
         last_move.setZero();
       } else {
-        if (move.dot(last_move) > 0) h = std::min(2 * h, 4 * o.search_step_deg * kDeg);
+        if (move.dot(last_move) > 0)
+          h = std::min(2 * h, 4 * o.search_step_deg * kDeg);
         last_move = move;
       }
     }
@@ -481,20 +506,23 @@ struct ShadowTracker::Impl {
   }
 
   void Describe(const Eigen::Vector3d& d, TrackedFrame* out) {
-    AnglesOf(d, &out->zenith_deg, &out->azimuth_deg);
+    AnglesFromSunInWorld(d, &out->zenith_deg, &out->azimuth_deg);
     out->sun_in_world = d;
     // The longest modelled shadow whose tip lands on the ground in view.
     double longest = 0;
     for (const internal::Caster& c : casters) {
       Eigen::Vector3f top, tip;
-      if (!internal::ShadowTip(scene, c, d, o.ground_object_ids, &top, &tip)) continue;
+      if (!internal::ShadowTip(scene, c, d, o.ground_object_ids, &top, &tip))
+        continue;
       const Eigen::Vector3f foot = c.FootBelow(top);
       Eigen::Vector2d foot_px, tip_px;
       if (!camera.WorldToPixel(foot.cast<double>(), &foot_px) ||
           !camera.WorldToPixel(tip.cast<double>(), &tip_px)) {
         continue;
       }
-      if (tip_px.x() < 0 || tip_px.y() < 0 || tip_px.x() > W - 1 || tip_px.y() > H - 1) continue;
+      if (tip_px.x() < 0 || tip_px.y() < 0 || tip_px.x() > W - 1 ||
+          tip_px.y() > H - 1)
+        continue;
       const double length = (tip - foot).norm();
       if (length > longest) {
         longest = length;
@@ -508,7 +536,8 @@ struct ShadowTracker::Impl {
   // pixels tells a black or overexposed frame as well as all of them do.
   std::string Unusable(const cv::Mat& frame) const {
     if (frame.empty()) return "frame cannot be decoded";
-    if (frame.cols != W || frame.rows != H) return "frame has another size than the clip";
+    if (frame.cols != W || frame.rows != H)
+      return "frame has another size than the clip";
     const int step = std::max(1, std::min(W, H) / 30);
     float hi = 0;
     int clipped = 0, count = 0;
@@ -529,17 +558,20 @@ ShadowTracker::ShadowTracker(const Scene& scene, const Camera& camera,
                              const ShadowTrackerOptions& options)
     : impl_(std::make_unique<Impl>(scene, camera, options)) {
   options.Check();
-  Require(options.ignore_top_rows + options.ignore_bottom_rows < camera.height(),
-          "ignore_top_rows + ignore_bottom_rows leave no rows");
+  Require(
+      options.ignore_top_rows + options.ignore_bottom_rows < camera.height(),
+      "ignore_top_rows + ignore_bottom_rows leave no rows");
 }
 
 ShadowTracker::~ShadowTracker() = default;
 
-TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector3d& sun_in_world) {
+TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
+                                       const Eigen::Vector3d& sun_in_world) {
   Impl& s = *impl_;
   Require(frame.type() == CV_32FC1 && frame.cols == s.W && frame.rows == s.H,
           "frame: expected float32 gray of the camera's size");
-  Require(sun_in_world.allFinite() && sun_in_world.z() > 0, "sun_in_world must point above the horizon");
+  Require(sun_in_world.allFinite() && sun_in_world.z() > 0,
+          "sun_in_world must point above the horizon");
   const auto t0 = std::chrono::steady_clock::now();
   TrackedFrame out;
   const Eigen::Vector3d d = sun_in_world.normalized();
@@ -572,44 +604,58 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame, const Eigen::Vector
     y[i] = frame.at<float>(s.ground[all[i]].px);
   }
   std::vector<float> sorted = y;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double scale = std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
+                   sorted.end());
+  const double scale =
+      std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
   AffineFit fit;
-  RobustAffineFit(static_cast<int>(all.size()), x.data(), y.data(), nullptr, 1, scale, 4, &fit);
+  RobustAffineFit(static_cast<int>(all.size()), x.data(), y.data(), nullptr, 1,
+                  scale, 4, &fit);
   std::vector<int> shadowed;
   s.band = s.BandAround(all, df, false, &shadowed);
   s.FindEdgeCasters(shadowed, d);
   s.frames_since_refresh = 0;
   cv::Mat1b near_edge(s.H, s.W, uint8_t(0));
-  for (int g : s.band) near_edge(s.ground[g].px) = 1;  // unreliable: lit state uncertain
+  for (int g : s.band)
+    near_edge(s.ground[g].px) = 1;  // unreliable: lit state uncertain
   for (size_t i = 0; i < all.size(); ++i) {
     const double model = fit.a[0] + fit.b[0] * x[i];
     if (model > 1e-4 && !near_edge(s.ground[all[i]].px)) {
-      s.ground[all[i]].albedo = std::clamp(static_cast<float>(y[i] / model), 0.05f, 20.f);
+      s.ground[all[i]].albedo =
+          std::clamp(static_cast<float>(y[i] / model), 0.05f, 20.f);
     }
   }
-  out.contrast = fit.a[0] > 0 ? fit.b[0] / fit.a[0] : (fit.b[0] > 0 ? 100.0 : 0.0);
+  out.contrast =
+      fit.a[0] > 0 ? fit.b[0] / fit.a[0] : (fit.b[0] > 0 ? 100.0 : 0.0);
   out.band_pixels = static_cast<int>(s.band.size());
   out.ok = !s.band.empty();
   out.confidence = out.ok ? 1.0 : 0.0;
-  if (!out.ok) out.reason = "no cast shadow of the model falls on the ground in view";
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!out.ok)
+    out.reason = "no cast shadow of the model falls on the ground in view";
+  out.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+          .count();
   return out;
 }
 
-TrackedFrame ShadowTracker::Track(const cv::Mat& frame) { return TrackImpl(frame, nullptr); }
+TrackedFrame ShadowTracker::Track(const cv::Mat& frame) {
+  return TrackImpl(frame, nullptr);
+}
 
-TrackedFrame ShadowTracker::Track(const cv::Mat& frame, const Eigen::Vector3d& predicted_sun_in_world) {
+TrackedFrame ShadowTracker::Track(
+    const cv::Mat& frame, const Eigen::Vector3d& predicted_sun_in_world) {
   Require(predicted_sun_in_world.allFinite() && predicted_sun_in_world.z() > 0,
           "predicted_sun_in_world must point above the horizon");
   const Eigen::Vector3d p = predicted_sun_in_world.normalized();
   return TrackImpl(frame, &p);
 }
 
-TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame, const Eigen::Vector3d* given) {
+TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
+                                      const Eigen::Vector3d* given) {
   Impl& s = *impl_;
   Require(s.initialized, "Track() before Initialize()");
-  Require(frame.empty() || frame.type() == CV_32FC1, "frame: expected float32 gray");
+  Require(frame.empty() || frame.type() == CV_32FC1,
+          "frame: expected float32 gray");
   const auto t0 = std::chrono::steady_clock::now();
   TrackedFrame out;
   // Prediction: the given Sun, or the last one kept at its angular velocity.
@@ -626,7 +672,9 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame, const Eigen::Vector3
     s.Describe(d, &out);
     out.rays = static_cast<int>(s.rays_cast);
     out.evaluations = static_cast<int>(s.evaluations);
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+            .count();
     return out;
   };
   out.reason = s.Unusable(frame);
@@ -643,18 +691,21 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame, const Eigen::Vector3
   // whole ground after a loss.
   const std::vector<int> last_boundary = s.boundary;
   std::vector<int> shadowed, band;
-  if (s.lost == 0 && !s.edge_caster.empty() && s.frames_since_refresh < kRefreshFrames) {
+  if (s.lost == 0 && !s.edge_caster.empty() &&
+      s.frames_since_refresh < kRefreshFrames) {
     band = s.BandAround(s.Window(s.MovedEdge(pred), 2), pf, true, &shadowed);
     ++s.frames_since_refresh;
     if (s.boundary.size() < 0.8 * last_boundary.size()) band.clear();
   }
   if (band.empty()) {
     s.frames_since_refresh = 0;
-    const std::vector<int> candidates = (!last_boundary.empty() && s.lost == 0)
-                                            ? s.Window(last_boundary, s.o.band_radius_px + 2)
-                                            : s.AllGround(1);
+    const std::vector<int> candidates =
+        (!last_boundary.empty() && s.lost == 0)
+            ? s.Window(last_boundary, s.o.band_radius_px + 2)
+            : s.AllGround(1);
     band = s.BandAround(candidates, pf, true, &shadowed);
-    if (band.empty() && s.lost == 0) band = s.BandAround(s.AllGround(1), pf, true, &shadowed);
+    if (band.empty() && s.lost == 0)
+      band = s.BandAround(s.AllGround(1), pf, true, &shadowed);
   }
   if (band.empty()) {
     ++s.lost;
@@ -665,21 +716,25 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame, const Eigen::Vector3
   s.band = band;
   s.LoadBand(frame);
   std::vector<float> sorted = s.band_y;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double scale = std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
+                   sorted.end());
+  const double scale =
+      std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
   // The search starts at twice the last frame's correction of the prediction
   // (a steady Sun needs few evaluations), at most search_step_deg.
-  const double step = s.lost > 0 ? 4.0 * s.o.search_step_deg
-                                 : std::clamp(2.0 * s.last_correction_deg,
-                                              std::max(0.05, 2 * s.o.tolerance_deg),
-                                              s.o.search_step_deg);
+  const double step = s.lost > 0
+                          ? 4.0 * s.o.search_step_deg
+                          : std::clamp(2.0 * s.last_correction_deg,
+                                       std::max(0.05, 2 * s.o.tolerance_deg),
+                                       s.o.search_step_deg);
   bool escaped = false;
-  const Eigen::Vector3d found = s.Search(pred, step, scale, &escaped);  // leaves its fit in s.fit
+  const Eigen::Vector3d found =
+      s.Search(pred, step, scale, &escaped);  // leaves its fit in s.fit
   if (escaped) {
     ++s.lost;
     out.reason = "shadow lost: no match within " +
-                 std::to_string(static_cast<int>(
-                     std::lround(kMaxWalkSteps * std::max(step, s.o.search_step_deg)))) +
+                 std::to_string(static_cast<int>(std::lround(
+                     kMaxWalkSteps * std::max(step, s.o.search_step_deg)))) +
                  " deg of the predicted Sun";
     return finish(pred);
   }
@@ -688,18 +743,22 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame, const Eigen::Vector3
   out.band_pixels = static_cast<int>(s.band_y.size());
   int inliers = 0;
   for (double r : s.fit.residual) inliers += std::abs(r) < 3 * scale;
-  const double inlier_fraction = s.band_y.empty() ? 0.0 : double(inliers) / s.band_y.size();
+  const double inlier_fraction =
+      s.band_y.empty() ? 0.0 : double(inliers) / s.band_y.size();
   if (out.contrast < s.o.min_contrast) {
     ++s.lost;
-    out.reason = "shadow lost: no sun/shade contrast on the ground (cloud, haze or glare?)";
+    out.reason =
+        "shadow lost: no sun/shade contrast on the ground (cloud, haze or "
+        "glare?)";
     return finish(pred);
   }
   out.ok = true;
-  out.confidence = inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
+  out.confidence =
+      inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;
-  s.last_correction_deg = std::atan2(found.cross(pred).norm(), found.dot(pred)) / kDeg;
+  s.last_correction_deg = AngleBetweenDeg(found, pred);
   s.sun = found;
   s.lost = 0;
   return finish(found);

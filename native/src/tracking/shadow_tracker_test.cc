@@ -11,11 +11,8 @@
 namespace sunlapse {
 namespace {
 
-using testing::AngleDeg;
-
 Eigen::Vector3d Sun(double zenith, double azimuth) {
-  const double z = zenith * M_PI / 180, a = azimuth * M_PI / 180;
-  return {std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z)};
+  return SunInWorldFromAngles(zenith, azimuth);
 }
 
 // A textured ground (fixed in the world) under noise, like real paving.
@@ -26,8 +23,11 @@ testing::RenderOptions Textured(uint32_t seed) {
   o.supersample = 3;
   o.albedo = [](int id, const Eigen::Vector3f& p) {
     if (id != 0) return 0.5;
-    const double tiles = (static_cast<int>(std::floor(p.x() * 2)) + static_cast<int>(std::floor(p.y() * 2))) % 2;
-    return 0.3 + 0.06 * tiles + 0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
+    const double tiles = (static_cast<int>(std::floor(p.x() * 2)) +
+                          static_cast<int>(std::floor(p.y() * 2))) %
+                         2;
+    return 0.3 + 0.06 * tiles +
+           0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
   };
   return o;
 }
@@ -52,21 +52,24 @@ TEST(ShadowTracker, FollowsRotatingAndShorteningShadowsWithinHalfADegree) {
   Fixture fx;
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
   const int n = 40;
-  const TrackedFrame first =
-      tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)), PathAt(0, n));
+  const TrackedFrame first = tracker.Initialize(
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)),
+      PathAt(0, n));
   ASSERT_TRUE(first.ok) << first.reason;
   EXPECT_TRUE(std::isfinite(first.shadow_end_px.x()));
   double worst = 0, sum = 0;
   for (int f = 1; f < n; ++f) {
-    const cv::Mat img = testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, n), Textured(f + 1));
+    const cv::Mat img = testing::RenderLambertian(
+        fx.scene, fx.cam, PathAt(f, n), Textured(f + 1));
     const TrackedFrame r = tracker.Track(img);
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    const double error = AngleDeg(r.sun_in_world, PathAt(f, n));
+    const double error = AngleBetweenDeg(r.sun_in_world, PathAt(f, n));
     worst = std::max(worst, error);
     sum += error;
     EXPECT_GT(r.confidence, 0.3);
   }
-  std::printf("error over the clip: %.3f deg mean, %.3f worst\n", sum / (n - 1), worst);
+  std::printf("error over the clip: %.3f deg mean, %.3f worst\n", sum / (n - 1),
+              worst);
   EXPECT_LT(worst, 0.5);
 }
 
@@ -78,7 +81,8 @@ TEST(ShadowTracker, FollowsRotatingAndShorteningShadowsWithinHalfADegree) {
 TEST(ShadowTracker, InitializeContrastPrefersTheTrueSun) {
   Fixture fx;
   const Eigen::Vector3d truth = PathAt(10, 40);
-  const cv::Mat img = testing::RenderLambertian(fx.scene, fx.cam, truth, Textured(3));
+  const cv::Mat img =
+      testing::RenderLambertian(fx.scene, fx.cam, truth, Textured(3));
   auto contrast = [&](const Eigen::Vector3d& sun) {
     ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
     const TrackedFrame r = tracker.Initialize(img, sun);
@@ -88,10 +92,13 @@ TEST(ShadowTracker, InitializeContrastPrefersTheTrueSun) {
   const double best = contrast(truth);
   for (double deg : {-5.0, -3.0, -2.0, 2.0, 3.0, 5.0}) {
     // Off in azimuth (about the vertical) and in zenith (about the horizontal).
-    const Eigen::Vector3d axes[2] = {Eigen::Vector3d::UnitZ(), truth.cross(Eigen::Vector3d::UnitZ())};
+    const Eigen::Vector3d axes[2] = {Eigen::Vector3d::UnitZ(),
+                                     truth.cross(Eigen::Vector3d::UnitZ())};
     for (const Eigen::Vector3d& axis : axes) {
-      const Eigen::Vector3d off = Eigen::AngleAxisd(deg * M_PI / 180, axis.normalized()) * truth;
-      EXPECT_GT(best, contrast(off)) << deg << " deg off about " << axis.transpose();
+      const Eigen::Vector3d off =
+          Eigen::AngleAxisd(deg * M_PI / 180, axis.normalized()) * truth;
+      EXPECT_GT(best, contrast(off))
+          << deg << " deg off about " << axis.transpose();
     }
   }
 }
@@ -101,10 +108,14 @@ TEST(ShadowTracker, InitializeContrastPrefersTheTrueSun) {
 TEST(ShadowTracker, ReinitialisedTrackerTracksAsAFreshOne) {
   Fixture fx;
   const int n = 40;
-  const cv::Mat f0 = testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
-  const cv::Mat f1 = testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
-  const cv::Mat f2 = testing::RenderLambertian(fx.scene, fx.cam, PathAt(2, n), Textured(3));
-  ShadowTracker fresh(fx.scene, fx.cam, fx.Options()), again(fx.scene, fx.cam, fx.Options());
+  const cv::Mat f0 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
+  const cv::Mat f1 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
+  const cv::Mat f2 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(2, n), Textured(3));
+  ShadowTracker fresh(fx.scene, fx.cam, fx.Options()),
+      again(fx.scene, fx.cam, fx.Options());
   ASSERT_TRUE(fresh.Initialize(f1, PathAt(1, n)).ok);
   ASSERT_TRUE(again.Initialize(f0, PathAt(0, n)).ok);
   again.Track(f1);
@@ -123,14 +134,17 @@ TEST(ShadowTracker, FollowsASunThatJumpsSeveralDegreesPerFrame) {
   Fixture fx;
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
   const int n = 12;
-  ASSERT_TRUE(tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)),
-                                 PathAt(0, n)).ok);
+  ASSERT_TRUE(tracker
+                  .Initialize(testing::RenderLambertian(
+                                  fx.scene, fx.cam, PathAt(0, n), Textured(1)),
+                              PathAt(0, n))
+                  .ok);
   double worst = 0;
   for (int f = 1; f < n; ++f) {
-    const TrackedFrame r =
-        tracker.Track(testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, n), Textured(f + 1)));
+    const TrackedFrame r = tracker.Track(testing::RenderLambertian(
+        fx.scene, fx.cam, PathAt(f, n), Textured(f + 1)));
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    worst = std::max(worst, AngleDeg(r.sun_in_world, PathAt(f, n)));
+    worst = std::max(worst, AngleBetweenDeg(r.sun_in_world, PathAt(f, n)));
   }
   std::printf("worst error with 3 deg steps: %.3f deg\n", worst);
   EXPECT_LT(worst, 0.5);
@@ -144,14 +158,17 @@ TEST(ShadowTracker, FollowsASunThatStandsStillThenJumps) {
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
   const int captures = 4, repeats = 5;
   auto sun = [&](int f) { return PathAt(f / repeats, 12); };
-  ASSERT_TRUE(tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, sun(0), Textured(1)),
-                                 sun(0)).ok);
+  ASSERT_TRUE(tracker
+                  .Initialize(testing::RenderLambertian(fx.scene, fx.cam,
+                                                        sun(0), Textured(1)),
+                              sun(0))
+                  .ok);
   double worst = 0;
   for (int f = 1; f < captures * repeats; ++f) {
-    const TrackedFrame r =
-        tracker.Track(testing::RenderLambertian(fx.scene, fx.cam, sun(f), Textured(f + 1)));
+    const TrackedFrame r = tracker.Track(
+        testing::RenderLambertian(fx.scene, fx.cam, sun(f), Textured(f + 1)));
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    worst = std::max(worst, AngleDeg(r.sun_in_world, sun(f)));
+    worst = std::max(worst, AngleBetweenDeg(r.sun_in_world, sun(f)));
   }
   std::printf("worst error with still Sun and 3 deg jumps: %.3f deg\n", worst);
   EXPECT_LT(worst, 0.5);
@@ -162,7 +179,9 @@ TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
   // The footage has a person-sized box walking across the pole's shadow.
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
   const int n = 30;
-  tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)), PathAt(0, n));
+  tracker.Initialize(
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1)),
+      PathAt(0, n));
   int lost = 0;
   for (int f = 1; f < n; ++f) {
     cv::Mat img;
@@ -171,10 +190,13 @@ TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
     } else if (f >= 15 && f <= 20) {
       testing::Mesh m = testing::BoxAndPole();
       const float x = 1.0f + 0.5f * (f - 15);
-      m.Box({x, -4.5f, 0}, {x + 0.4f, -4.1f, 1.8f}, 3);  // a walker, not in the model
-      img = testing::RenderLambertian(m.Build(), fx.cam, PathAt(f, n), Textured(f + 1));
+      m.Box({x, -4.5f, 0}, {x + 0.4f, -4.1f, 1.8f},
+            3);  // a walker, not in the model
+      img = testing::RenderLambertian(m.Build(), fx.cam, PathAt(f, n),
+                                      Textured(f + 1));
     } else {
-      img = testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, n), Textured(f + 1));
+      img = testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, n),
+                                      Textured(f + 1));
     }
     const TrackedFrame r = tracker.Track(img);
     if (f == 8 || f == 9) {
@@ -184,7 +206,8 @@ TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
       continue;
     }
     ASSERT_TRUE(r.ok) << "frame " << f << ": " << r.reason;
-    EXPECT_LT(AngleDeg(r.sun_in_world, PathAt(f, n)), 1.0) << "frame " << f;
+    EXPECT_LT(AngleBetweenDeg(r.sun_in_world, PathAt(f, n)), 1.0)
+        << "frame " << f;
   }
   EXPECT_EQ(lost, 2);
 }
@@ -192,7 +215,9 @@ TEST(ShadowTracker, RecoversAfterBlackFramesAndAnOccluderCrossing) {
 TEST(ShadowTracker, UndecodableAndFlatFramesAreReportedNotGuessed) {
   Fixture fx;
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
-  tracker.Initialize(testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 130), Textured(1)), Sun(40, 130));
+  tracker.Initialize(
+      testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 130), Textured(1)),
+      Sun(40, 130));
   TrackedFrame r = tracker.Track(cv::Mat());
   EXPECT_FALSE(r.ok);
   EXPECT_EQ(r.reason, "frame cannot be decoded");
@@ -200,7 +225,8 @@ TEST(ShadowTracker, UndecodableAndFlatFramesAreReportedNotGuessed) {
   testing::RenderOptions overcast = Textured(3);
   overcast.sun = 0.0;
   overcast.ambient = 0.6;
-  r = tracker.Track(testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 131), overcast));
+  r = tracker.Track(
+      testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 131), overcast));
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.reason.find("shadow lost"), std::string::npos);
 }
@@ -210,8 +236,10 @@ TEST(ShadowTracker, RejectsBadSetup) {
   ShadowTrackerOptions o;  // no ground
   EXPECT_THROW(ShadowTracker(fx.scene, fx.cam, o), std::invalid_argument);
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
-  EXPECT_THROW(tracker.Track(cv::Mat(240, 320, CV_32F, 0.5f)), std::invalid_argument);
-  EXPECT_THROW(tracker.Initialize(cv::Mat(10, 10, CV_32F), Sun(40, 0)), std::invalid_argument);
+  EXPECT_THROW(tracker.Track(cv::Mat(240, 320, CV_32F, 0.5f)),
+               std::invalid_argument);
+  EXPECT_THROW(tracker.Initialize(cv::Mat(10, 10, CV_32F), Sun(40, 0)),
+               std::invalid_argument);
 }
 
 }  // namespace

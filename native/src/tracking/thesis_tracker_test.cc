@@ -94,25 +94,25 @@ TEST(ThesisTracker, FollowsAPoleShadowSeenFromAbove) {
   m.Box({-0.3f, -0.3f, 0}, {0.3f, 0.3f, 4.0f}, 1);
   const Scene scene = m.Build();
   const Camera cam = testing::LookAt({0, -0.01, 40}, {0, 0, 0}, 480, 480, 35);
-  auto sun = [](double z, double a) {
-    z *= M_PI / 180;
-    a *= M_PI / 180;
-    return Eigen::Vector3d(std::sin(z) * std::sin(a), std::sin(z) * std::cos(a), std::cos(z));
-  };
+  auto sun = [](double z, double a) { return SunInWorldFromAngles(z, a); };
   testing::RenderOptions ro;
   ro.noise = 0.005;
   ro.supersample = 2;
-  ro.albedo = [](int id, const Eigen::Vector3f&) { return id == 1 ? 0.15 : 0.5; };
+  ro.albedo = [](int id, const Eigen::Vector3f&) {
+    return id == 1 ? 0.15 : 0.5;
+  };
   ThesisTrackerOptions o;
   o.ground_object_ids = {0};
   ThesisTracker tracker(scene, cam, o);
-  const TrackedFrame first =
-      tracker.Initialize(testing::RenderLambertian(scene, cam, sun(60, 200), ro), sun(60, 200));
+  const TrackedFrame first = tracker.Initialize(
+      testing::RenderLambertian(scene, cam, sun(60, 200), ro), sun(60, 200));
   ASSERT_EQ(tracker.candidates().size(), 1u);
   const ShadowCandidate& sc = tracker.candidates()[0];
-  ASSERT_TRUE(first.ok) << first.reason << " dir " << sc.direction_error_deg << " border "
-                        << sc.on_border << " energy " << sc.energy << " len " << sc.length_px
-                        << " start " << sc.start_px.transpose() << " end " << sc.end_px.transpose();
+  ASSERT_TRUE(first.ok) << first.reason << " dir " << sc.direction_error_deg
+                        << " border " << sc.on_border << " energy " << sc.energy
+                        << " len " << sc.length_px << " start "
+                        << sc.start_px.transpose() << " end "
+                        << sc.end_px.transpose();
   // Zenith 60 -> 50, azimuth 200 -> 220 over 10 frames. The method walks one
   // edge of the shadow and sums image-angle changes, so it is a few degrees
   // off; an inverted zenith relation (the literal eq. 4.8) or the literal

@@ -38,7 +38,8 @@ float MaskedMedian(const cv::Mat1f& m, const cv::Mat1b& mask) {
 
 // The mean of `values` over the `lit` pixels in a win x win window around
 // each pixel; `fallback` where the window holds too few of them.
-cv::Mat1f LocalLevel(const cv::Mat1f& values, const cv::Mat1b& lit, int win, float fallback) {
+cv::Mat1f LocalLevel(const cv::Mat1f& values, const cv::Mat1b& lit, int win,
+                     float fallback) {
   cv::Mat1f w, vw;
   lit.convertTo(w, CV_32F, 1.0 / 255);
   cv::multiply(values, w, vw);
@@ -59,21 +60,28 @@ cv::Mat1f LocalLevel(const cv::Mat1f& values, const cv::Mat1b& lit, int win, flo
 void UnmodelledShadowOptions::Check() const {
   Require(dark_ratio > 0 && dark_ratio < 1, "dark_ratio must be in (0, 1)");
   Require(max_chroma_ratio >= 1, "max_chroma_ratio must be >= 1");
-  Require(level_window > 0 && level_window <= 1, "level_window must be in (0, 1]");
-  Require(model_margin_px >= 0 && model_margin_px <= 50, "model_margin_px must be in [0, 50]");
-  Require(min_area_fraction >= 0 && min_area_fraction < 1, "min_area_fraction must be in [0, 1)");
+  Require(level_window > 0 && level_window <= 1,
+          "level_window must be in (0, 1]");
+  Require(model_margin_px >= 0 && model_margin_px <= 50,
+          "model_margin_px must be in [0, 50]");
+  Require(min_area_fraction >= 0 && min_area_fraction < 1,
+          "min_area_fraction must be in [0, 1)");
   Require(min_edge_contrast >= 0, "min_edge_contrast must be >= 0");
-  Require(registration_px >= 0 && registration_px <= 20, "registration_px must be in [0, 20]");
+  Require(registration_px >= 0 && registration_px <= 20,
+          "registration_px must be in [0, 20]");
 }
 
-UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& background,
-                                          const cv::Mat& ground, const cv::Mat& model_shadow,
+UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame,
+                                          const cv::Mat& background,
+                                          const cv::Mat& ground,
+                                          const cv::Mat& model_shadow,
                                           const UnmodelledShadowOptions& o) {
   o.Check();
-  Require(!frame.empty() && (frame.type() == CV_32FC1 || frame.type() == CV_32FC3),
-          "frame: expected float32 gray or colour");
-  Require(background.empty() ||
-              (background.size() == frame.size() && background.type() == frame.type()),
+  Require(
+      !frame.empty() && (frame.type() == CV_32FC1 || frame.type() == CV_32FC3),
+      "frame: expected float32 gray or colour");
+  Require(background.empty() || (background.size() == frame.size() &&
+                                 background.type() == frame.type()),
           "background: expected the frame's size and type (or none)");
   Require(ground.size() == frame.size() && ground.type() == CV_8UC1,
           "ground: expected a uint8 mask of the frame's size");
@@ -116,16 +124,19 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
   cv::Mat1b model = model_shadow != 0, near_model;
   if (o.model_margin_px > 0) {
     const int k = 2 * o.model_margin_px + 1;
-    cv::dilate(model, model, cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));
+    cv::dilate(model, model,
+               cv::getStructuringElement(cv::MORPH_ELLIPSE, {k, k}));
   }
-  cv::dilate(model, near_model, cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5}));
+  cv::dilate(model, near_model,
+             cv::getStructuringElement(cv::MORPH_ELLIPSE, {5, 5}));
 
   // Lit level around each pixel: the mean over the lit-looking ground in a
   // wide window (pixels darker than dark_ratio x the global median and the
   // model's shadow are left out, so shadows do not pull the level down).
   // Without a background the ground's albedo must be even at that scale.
   const cv::Mat1b free_ground = valid & ~model;
-  const float global = MaskedMedian(ratio, cv::countNonZero(free_ground) ? free_ground : valid);
+  const float global =
+      MaskedMedian(ratio, cv::countNonZero(free_ground) ? free_ground : valid);
   if (global <= 0) return out;
   const cv::Mat1b lit = free_ground & (ratio > o.dark_ratio * global);
   const int win = std::max(3, static_cast<int>(o.level_window * W) | 1);
@@ -138,7 +149,8 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
   if (!bg.empty() && o.registration_px > 0) {
     const int k = 2 * o.registration_px + 1;
     cv::Mat1f b_min;
-    cv::erode(Luminance(bg), b_min, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+    cv::erode(Luminance(bg), b_min,
+              cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
     cv::divide(f, cv::max(b_min, 1e-6f), ratio_test);
   }
   cv::Mat1b dark = valid & ~model & (ratio_test < o.dark_ratio * level);
@@ -169,9 +181,10 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
 
   cv::Mat1i labels;
   cv::Mat stats, centroids;
-  const int n = cv::connectedComponentsWithStats(dark, labels, stats, centroids, 8, CV_32S);
-  const int min_area =
-      std::max(12, static_cast<int>(o.min_area_fraction * cv::countNonZero(valid)));
+  const int n = cv::connectedComponentsWithStats(dark, labels, stats, centroids,
+                                                 8, CV_32S);
+  const int min_area = std::max(
+      12, static_cast<int>(o.min_area_fraction * cv::countNonZero(valid)));
   std::vector<std::vector<float>> rim(n);
   std::vector<double> ratio_sum(n, 0.0);
   std::vector<uint8_t> touches(n, 0);
@@ -181,8 +194,9 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
       if (l == 0 || stats.at<int>(l, cv::CC_STAT_AREA) < min_area) continue;
       ratio_sum[l] += ratio(y, x) / std::max(1e-6f, level(y, x));
       touches[l] |= near_model(y, x) != 0;
-      const bool inner = x > 0 && y > 0 && x < W - 1 && y < H - 1 && labels(y, x - 1) == l &&
-                         labels(y, x + 1) == l && labels(y - 1, x) == l && labels(y + 1, x) == l;
+      const bool inner = x > 0 && y > 0 && x < W - 1 && y < H - 1 &&
+                         labels(y, x - 1) == l && labels(y, x + 1) == l &&
+                         labels(y - 1, x) == l && labels(y + 1, x) == l;
       if (!inner) rim[l].push_back(energy_max(y, x));
     }
   }
@@ -197,8 +211,10 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
     if (contrast < o.min_edge_contrast) continue;
     UnmodelledShadow s;
     s.area_px = area;
-    s.box = cv::Rect(stats.at<int>(l, cv::CC_STAT_LEFT), stats.at<int>(l, cv::CC_STAT_TOP),
-                     stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT));
+    s.box = cv::Rect(stats.at<int>(l, cv::CC_STAT_LEFT),
+                     stats.at<int>(l, cv::CC_STAT_TOP),
+                     stats.at<int>(l, cv::CC_STAT_WIDTH),
+                     stats.at<int>(l, cv::CC_STAT_HEIGHT));
     s.centroid_px = {centroids.at<double>(l, 0), centroids.at<double>(l, 1)};
     s.darkening = ratio_sum[l] / area;
     s.edge_contrast = contrast;
@@ -207,7 +223,9 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& b
     out.mask.setTo(255, labels == l);
   }
   std::sort(out.regions.begin(), out.regions.end(),
-            [](const UnmodelledShadow& a, const UnmodelledShadow& b) { return a.area_px > b.area_px; });
+            [](const UnmodelledShadow& a, const UnmodelledShadow& b) {
+              return a.area_px > b.area_px;
+            });
   return out;
 }
 

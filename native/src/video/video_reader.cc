@@ -72,13 +72,15 @@ bool VideoReader::Read(cv::Mat* bgr) {
     if (position_ >= num_frames_) return false;
     *bgr = cv::imread(SequencePath(position_), cv::IMREAD_COLOR);
     if (!bgr->empty() && (bgr->cols != width_ || bgr->rows != height_)) {
-      bgr->release();  // a frame of another size is as unusable as a corrupt one
+      bgr->release();  // a frame of another size is as unusable as a corrupt
+                       // one
     }
     ++position_;
     return true;
   }
   if (!capture_->read(*bgr)) {
-    // Containers often over-report their length; the end is where reading stops.
+    // Containers often over-report their length; the end is where reading
+    // stops.
     if (num_frames_ <= 0 || position_ >= num_frames_ - 1) return false;
     bgr->release();
     ++position_;
@@ -96,7 +98,8 @@ bool VideoReader::Seek(int index) {
       position_ = static_cast<int>(capture_->get(cv::CAP_PROP_POS_FRAMES));
     }
     cv::Mat skip;
-    while (position_ < index && capture_->grab()) ++position_;  // exact, decodes
+    while (position_ < index && capture_->grab())
+      ++position_;  // exact, decodes
     if (position_ != index) return false;
   }
   position_ = index;
@@ -114,8 +117,9 @@ cv::Mat ToLinearGray(const cv::Mat& image, double gamma) {
     gray = image;
   }
   cv::Mat out;
-  const double scale = gray.depth() == CV_8U ? 1.0 / 255.0
-                       : gray.depth() == CV_16U ? 1.0 / 65535.0 : 1.0;
+  const double scale = gray.depth() == CV_8U    ? 1.0 / 255.0
+                       : gray.depth() == CV_16U ? 1.0 / 65535.0
+                                                : 1.0;
   gray.convertTo(out, CV_32F, scale);
   if (gamma != 1.0) cv::pow(out, gamma, out);
   return out;

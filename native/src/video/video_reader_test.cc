@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
@@ -15,14 +15,16 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("sunlapse_" + name + "_" +
-                                                  std::to_string(::getpid()));
+  const fs::path d = fs::temp_directory_path() /
+                     ("sunlapse_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
 }
 
-cv::Mat Frame(int i) { return cv::Mat(24, 32, CV_8UC3, cv::Scalar(10 * i, 20, 30)); }
+cv::Mat Frame(int i) {
+  return cv::Mat(24, 32, CV_8UC3, cv::Scalar(10 * i, 20, 30));
+}
 
 TEST(VideoReader, ReadsANumberedSequenceFromItsFirstFile) {
   const fs::path d = TempDir("seq");

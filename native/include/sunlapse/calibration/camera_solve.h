@@ -29,16 +29,18 @@ struct CameraSolveResult {
   std::string message;
   double focal_px = 0.0;
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
-  Eigen::Isometry3d cam_from_world = Eigen::Isometry3d::Identity();  // OpenCV camera
+  Eigen::Isometry3d cam_from_world =
+      Eigen::Isometry3d::Identity();  // OpenCV camera
   // Blender's Object.matrix_world for the camera (local -Z forward, +Y up).
   Eigen::Matrix4d blender_matrix_world = Eigen::Matrix4d::Identity();
-  double rms_px = 0.0;                 // reprojection error
-  std::vector<double> errors_px;       // per point
+  double rms_px = 0.0;            // reprojection error
+  std::vector<double> errors_px;  // per point
 };
 
 // points_in_world: N x 3 (world frame, metres); pixels: N x 2 (OpenCV pixels).
-CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& points_in_world,
-                              const std::vector<Eigen::Vector2d>& pixels, int width,
-                              int height, const CameraSolveOptions& options = {});
+CameraSolveResult SolveCamera(
+    const std::vector<Eigen::Vector3d>& points_in_world,
+    const std::vector<Eigen::Vector2d>& pixels, int width, int height,
+    const CameraSolveOptions& options = {});
 
 }  // namespace sunlapse

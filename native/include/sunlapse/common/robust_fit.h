@@ -9,9 +9,9 @@
 namespace sunlapse {
 
 struct AffineFit {
-  std::vector<double> a, b;        // per group
-  std::vector<double> residual;    // per sample: y - (a + b x)
-  double cost = 0.0;               // sum of log(1 + r^2 / scale^2)
+  std::vector<double> a, b;      // per group
+  std::vector<double> residual;  // per sample: y - (a + b x)
+  double cost = 0.0;             // sum of log(1 + r^2 / scale^2)
 };
 
 // group may be null (one group). Samples with a group < 0 are ignored.

@@ -112,10 +112,4 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
                                     const InitialSunOptions& options,
                                     const ProgressCallback& progress = nullptr);
 
-// Unit vector toward a Sun at zenith/azimuth (degrees, world frame).
-Eigen::Vector3d SunVector(double zenith_deg, double azimuth_deg);
-// Inverse of SunVector: writes zenith and azimuth in degrees.
-void SunAngles(const Eigen::Vector3d& toward_sun, double* zenith_deg,
-               double* azimuth_deg);
-
 }  // namespace sunlapse

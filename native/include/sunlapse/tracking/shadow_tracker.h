@@ -64,19 +64,19 @@ struct TrackedFrame {
   // the prediction the tracker keeps following.
   bool ok = false;
   std::string reason;
-  double zenith_deg = 0.0;   // world frame, azimuth clockwise from +Y
+  double zenith_deg = 0.0;  // world frame, azimuth clockwise from +Y
   double azimuth_deg = 0.0;
   Eigen::Vector3d sun_in_world = Eigen::Vector3d::UnitZ();
-  double confidence = 0.0;   // 0..1
-  double contrast = 0.0;     // fitted sun / ambient on the ground band
+  double confidence = 0.0;  // 0..1
+  double contrast = 0.0;    // fitted sun / ambient on the ground band
   int band_pixels = 0;
-  int rays = 0;              // shadow rays cast this frame (the tracker's cost)
-  int evaluations = 0;       // candidate Suns scored this frame
+  int rays = 0;         // shadow rays cast this frame (the tracker's cost)
+  int evaluations = 0;  // candidate Suns scored this frame
   // The longest modelled shadow on this frame: caster foot and shadow tip, in
   // OpenCV pixels (NaN when no caster's shadow falls in view).
   Eigen::Vector2d shadow_start_px{NAN, NAN};
   Eigen::Vector2d shadow_end_px{NAN, NAN};
-  double seconds = 0.0;      // tracking only, decoding excluded
+  double seconds = 0.0;  // tracking only, decoding excluded
 };
 
 class ShadowTracker {
@@ -94,10 +94,12 @@ class ShadowTracker {
   TrackedFrame Track(const cv::Mat& frame);
   // The same, searching around a given Sun instead of the tracker's own
   // prediction (the whole-clip path's direction: sky/sun_path.h).
-  TrackedFrame Track(const cv::Mat& frame, const Eigen::Vector3d& predicted_sun_in_world);
+  TrackedFrame Track(const cv::Mat& frame,
+                     const Eigen::Vector3d& predicted_sun_in_world);
 
  private:
-  TrackedFrame TrackImpl(const cv::Mat& frame, const Eigen::Vector3d* predicted);
+  TrackedFrame TrackImpl(const cv::Mat& frame,
+                         const Eigen::Vector3d* predicted);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -59,9 +59,9 @@ struct ShadowCandidate {
   Eigen::Vector2d start_px, end_px;  // at the caster, at the tip
   double direction_error_deg = 0;    // vs the Sun's direction in the image
   bool on_border = false;
-  double energy = 0;                 // mean energy along the segment
+  double energy = 0;  // mean energy along the segment
   double length_px = 0;
-  int ends_on_model = 0;             // 0, 1 or 2
+  int ends_on_model = 0;  // 0, 1 or 2
 };
 
 // The five criteria, in order; returns the index of the kept shadow or -1.
@@ -74,10 +74,12 @@ cv::Mat EnergyImage(const cv::Mat& gray);
 
 class ThesisTracker {
  public:
-  ThesisTracker(const Scene& scene, const Camera& camera, const ThesisTrackerOptions& options);
+  ThesisTracker(const Scene& scene, const Camera& camera,
+                const ThesisTrackerOptions& options);
   ~ThesisTracker();
   // First frame (CV_32F gray) with the initial Sun.
-  TrackedFrame Initialize(const cv::Mat& frame, const Eigen::Vector3d& sun_in_world);
+  TrackedFrame Initialize(const cv::Mat& frame,
+                          const Eigen::Vector3d& sun_in_world);
   TrackedFrame Track(const cv::Mat& frame);
   const std::vector<ShadowCandidate>& candidates() const;
 

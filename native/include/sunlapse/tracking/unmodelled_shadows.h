@@ -54,8 +54,8 @@ struct UnmodelledShadow {
   int area_px = 0;
   cv::Rect box;
   Eigen::Vector2d centroid_px;
-  double darkening = 0;     // mean ratio to the lit level inside (0..1)
-  double edge_contrast = 0; // rim energy / ground median energy
+  double darkening = 0;      // mean ratio to the lit level inside (0..1)
+  double edge_contrast = 0;  // rim energy / ground median energy
   // It borders the model's predicted shadow (within model_margin_px + 2):
   // it may be part of a modelled shadow that the Sun used puts a little off.
   bool touches_model = false;
@@ -67,11 +67,11 @@ struct UnmodelledShadows {
 };
 
 // frame, background: CV_32FC1 (gray) or CV_32FC3 (linear colour), same size
-// and type; background may be empty (one frame alone). ground, model_shadow: CV_8UC1 masks (non-zero = on the ground /
-// in the model's cast shadow under this frame's Sun). Throws
-// std::invalid_argument on mismatched inputs.
-UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame, const cv::Mat& background,
-                                          const cv::Mat& ground, const cv::Mat& model_shadow,
-                                          const UnmodelledShadowOptions& options = {});
+// and type; background may be empty (one frame alone). ground, model_shadow:
+// CV_8UC1 masks (non-zero = on the ground / in the model's cast shadow under
+// this frame's Sun). Throws std::invalid_argument on mismatched inputs.
+UnmodelledShadows DetectUnmodelledShadows(
+    const cv::Mat& frame, const cv::Mat& background, const cv::Mat& ground,
+    const cv::Mat& model_shadow, const UnmodelledShadowOptions& options = {});
 
 }  // namespace sunlapse

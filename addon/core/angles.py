@@ -1,0 +1,72 @@
+"""The Sun's angles and its direction, one helper for the Python side
+(native/include/sunlapse/common/angles.h is the C++ one; DESIGN.md §2).
+
+World frame: Blender's, +X east, +Y north (of the scene), +Z up. Zenith from
++Z toward the Sun; azimuth clockwise from +Y toward +X; degrees. A geographic
+azimuth is measured from true north; a scene whose +Y is turned from north by
+north_offset (Blender's Sun Position add-on) has
+azimuth_world = azimuth_geographic + north_offset.
+
+Every function takes scalars or numpy arrays (vectors along the last axis).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Tuple
+
+import numpy as np
+
+
+def wrap_azimuth_deg(azimuth_deg: Any) -> Any:
+    """An angle wrapped to [0, 360)."""
+    # -1e-15 mod 360 rounds to 360.0, which is 0.
+    a = np.mod(azimuth_deg, 360.0)
+    a = np.where(a >= 360.0, 0.0, a)
+    return a if np.ndim(a) else float(a)
+
+
+def sun_in_world_from_angles(zenith_deg: Any, azimuth_world_deg: Any) -> np.ndarray:
+    """Unit vector toward the Sun, (sin z sin a, sin z cos a, cos z); shape
+    (..., 3) for array inputs."""
+    z, a = np.radians(zenith_deg), np.radians(azimuth_world_deg)
+    return np.stack(np.broadcast_arrays(np.sin(z) * np.sin(a), np.sin(z) * np.cos(a),
+                                        np.cos(z)), axis=-1)
+
+
+def angles_from_sun_in_world(sun_in_world: Any) -> Tuple[Any, Any]:
+    """(zenith_deg in [0, 180], azimuth_world_deg in [0, 360)) of vectors of
+    any non-zero length; floats for one vector, arrays for (..., 3)."""
+    v = np.asarray(sun_in_world, dtype=float)
+    norm = np.linalg.norm(v, axis=-1)
+    zenith = np.degrees(np.arccos(np.clip(v[..., 2] / norm, -1.0, 1.0)))
+    azimuth = wrap_azimuth_deg(np.degrees(np.arctan2(v[..., 0], v[..., 1])))
+    if v.ndim == 1:
+        return float(zenith), float(azimuth)
+    return zenith, azimuth
+
+
+def azimuth_world_from_geographic(azimuth_geographic_deg: Any, north_offset_deg: Any) -> Any:
+    """A geographic azimuth in a scene whose +Y is turned from north by
+    north_offset_deg; [0, 360)."""
+    return wrap_azimuth_deg(np.add(azimuth_geographic_deg, north_offset_deg))
+
+
+def azimuth_geographic_from_world(azimuth_world_deg: Any, north_offset_deg: Any) -> Any:
+    """Inverse of azimuth_world_from_geographic; [0, 360)."""
+    return wrap_azimuth_deg(np.subtract(azimuth_world_deg, north_offset_deg))
+
+
+def sun_in_world_from_geographic(zenith_deg: Any, azimuth_geographic_deg: Any,
+                                 north_offset_deg: Any) -> np.ndarray:
+    """Unit vector toward a Sun given as a track file gives it (geographic
+    azimuth and the scene's north offset)."""
+    return sun_in_world_from_angles(
+        zenith_deg, azimuth_world_from_geographic(azimuth_geographic_deg, north_offset_deg))
+
+
+def angle_between_deg(u: Any, v: Any) -> float:
+    """Angle between two 3-vectors of any non-zero length. atan2(|u x v|, u.v)
+    stays exact for tiny angles, where acos of a dot of float32 vectors that
+    are not quite unit reads 0.01 deg between a vector and itself."""
+    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+    return float(np.degrees(np.arctan2(np.linalg.norm(np.cross(u, v)), np.dot(u, v))))
