@@ -29,6 +29,8 @@ TWO_PASS_DEGREE = {"thesis": 1, "default": 3}
 # online mode): near the zenith the azimuth swings too fast for either
 # (core.smoothing.two_pass_directions, online_directions).
 SMOOTHING_SPACE = {"thesis": "angles", "default": "directions"}
+
+
 class PipelineError(Exception):
     """The run cannot go on (unreadable clip, cancelled, ...): says why."""
 
@@ -256,8 +258,9 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     if options.frame_times is not None:
         missing = [f for f in frames if f not in options.frame_times]
         if missing:
+            more = " ..." if len(missing) > 5 else ""
             raise PipelineError(f"the times file has no time for frame(s) "
-                                f"{', '.join(map(str, missing[:5]))}{' ...' if len(missing) > 5 else ''}")
+                                f"{', '.join(map(str, missing[:5]))}{more}")
         times = [options.frame_times[f] for f in frames]
     # Frames are visited in the order they were taken (decode order when the
     # times are unknown): the tracker follows the shadow between neighbours
@@ -441,7 +444,7 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
         seconds = [by_frame[f] for f in visit]
     try:
         result = whole_clip.estimate(
-            scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
+            native, scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
             ignore_top_rows=options.ignore_top_rows,
             progress=None if progress is None else (lambda x: progress(0.95 * x)))
     except whole_clip.Cancelled:

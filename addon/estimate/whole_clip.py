@@ -27,8 +27,6 @@ from typing import Callable, List, Optional, Sequence
 
 import numpy as np
 
-from .. import native_loader
-
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
 REFERENCE_FRAMES = 24
@@ -99,15 +97,16 @@ def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
 
 
-def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Optional[np.ndarray]],
+def estimate(native, scene, camera, frames: Sequence[int],
+             read_gray: Callable[[int], Optional[np.ndarray]],
              ground_object_ids: Sequence[int], times_s: Optional[Sequence[float]] = None,
              ignore_top_rows: int = 0,
              progress: Optional[Callable[[float], object]] = None) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None when it
     cannot be decoded or is not the camera's size. `times_s`: capture times
-    in seconds (None when unknown)."""
-    native = native_loader.require()
+    in seconds (None when unknown). `native`: the compiled module (passed in,
+    so this controller imports nothing of the add-on's package)."""
     frames = list(frames)
     n = len(frames)
     result = WholeClipResult()
@@ -190,7 +189,7 @@ def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Op
             if status[k] != ok and status[k] != native.FrameEvidenceStatus.NO_SHADOWS:
                 raw.reason = reasons[k] or "no evidence on this frame"
                 continue
-            if first is None or k < first or k > last:
+            if first is None or last is None or not first <= k <= last:
                 # Beyond the segment's measured frames: nothing to carry.
                 raw.reason = "no shadow evidence on this frame or around it in its segment"
                 continue
@@ -215,7 +214,8 @@ def estimate(scene, camera, frames: Sequence[int], read_gray: Callable[[int], Op
             if refined is not None:
                 raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg
                 raw.refined, raw.tracked = True, refined
-                raw.confidence = refined.confidence * (support if measured[k] else CARRIED_CONFIDENCE)
+                raw.confidence = refined.confidence * (
+                    support if measured[k] else CARRIED_CONFIDENCE)
             else:
                 raw.zenith_deg, raw.azimuth_world_deg = angles_of(d)
                 raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE

@@ -2,7 +2,6 @@
 import json
 import os
 import subprocess
-import sys
 
 import bpy
 import pytest
@@ -73,7 +72,7 @@ def run_estimate(blend, out, *extra):
 
 
 def error_lines(proc):
-    return [l for l in proc.stderr.splitlines() if l.startswith("sunlapse: error:")]
+    return [line for line in proc.stderr.splitlines() if line.startswith("sunlapse: error:")]
 
 
 def test_scripted_run_writes_a_track_for_a_valid_scene(empty_scene, tmp_path):
@@ -90,7 +89,8 @@ def test_scripted_run_writes_a_track_for_a_valid_scene(empty_scene, tmp_path):
     assert all(f["reason"] for f in track["frames"][1:])
     assert track["clip"].endswith("frame_0001.png")
     # The user is told why, in words.
-    warnings = [l for l in proc.stdout.splitlines() if l.startswith("sunlapse: warning:")]
+    warnings = [line for line in proc.stdout.splitlines()
+                if line.startswith("sunlapse: warning:")]
     assert warnings and "no frame shows shadows the model can cast" in warnings[-1]
 
 

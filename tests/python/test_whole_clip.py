@@ -17,7 +17,11 @@ if "sunlapse" not in sys.modules:
     _package = types.ModuleType("sunlapse")
     _package.__path__ = [os.path.join(ROOT, "addon")]
     sys.modules["sunlapse"] = _package
-native = pytest.importorskip("sunlapse._native")
+# One copy of the compiled module: the other tests import it as `_native`
+# (conftest puts addon/ on the path); loading it again under a second name
+# would register its types twice.
+native = pytest.importorskip("_native")
+sys.modules.setdefault("sunlapse._native", native)
 from sunlapse import pipeline  # noqa: E402
 from sunlapse.estimate import whole_clip  # noqa: E402
 
@@ -106,7 +110,7 @@ def error_deg(zenith, azimuth, truth):
 def run(world, frames_gray, times_s=None):
     scene, camera = world[0], world[1]
     numbers = list(range(1, len(frames_gray) + 1))
-    return whole_clip.estimate(scene, camera, numbers, lambda f: frames_gray[f - 1], [0],
+    return whole_clip.estimate(native, scene, camera, numbers, lambda f: frames_gray[f - 1], [0],
                                times_s=times_s)
 
 
