@@ -22,9 +22,10 @@ from .core import frametimes, smoothing, sunpath, trackfile
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
 GAMMA = {"thesis": 1.0, "default": 2.2}
-# Two-pass smoothing: the thesis fits straight lines; over hours the Sun's
-# angles bend, so ours allows a cubic.
-TWO_PASS_DEGREE = {"thesis": 1, "default": 3}
+# Two-pass smoothing: the thesis fits a straight line per angle; ours fits
+# local quadratics to the Sun's direction (core.smoothing.
+# two_pass_local_directions), which follow a whole day's path.
+TWO_PASS_DEGREE = {"thesis": 1}
 # Ours smooths the Sun's direction, not each angle (both the two-pass and the
 # online mode): near the zenith the azimuth swings too fast for either
 # (core.smoothing.two_pass_directions, online_directions).
@@ -409,11 +410,16 @@ def _smooth_segments(numbers, raws, segments, mode, options, times):
         if not have:
             continue
         ks = [k for k in ks if have[0] <= k <= have[-1]]
-        z_s, a_s = smoothing.smooth_angles(
-            [numbers[k] for k in ks], [raws[k][1] for k in ks], [raws[k][2] for k in ks],
-            [raws[k][3] for k in ks], mode, degree=TWO_PASS_DEGREE[options.method],
-            space=SMOOTHING_SPACE[options.method],
-            times_s=None if seconds is None else [seconds[k] for k in ks])
+        x = [numbers[k] for k in ks] if seconds is None else [seconds[k] for k in ks]
+        if mode == "two_pass" and options.method == "default":
+            z_s, a_s = smoothing.two_pass_local_directions(
+                x, [raws[k][1] for k in ks], [raws[k][2] for k in ks], [raws[k][3] for k in ks])
+        else:
+            z_s, a_s = smoothing.smooth_angles(
+                [numbers[k] for k in ks], [raws[k][1] for k in ks], [raws[k][2] for k in ks],
+                [raws[k][3] for k in ks], mode, degree=TWO_PASS_DEGREE.get(options.method, 3),
+                space=SMOOTHING_SPACE[options.method],
+                times_s=None if seconds is None else [seconds[k] for k in ks])
         for k, z, a in zip(ks, z_s, a_s):
             zs[k], azs[k] = z, a
     return zs, azs

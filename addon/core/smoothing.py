@@ -199,3 +199,61 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
         z_out[i] = z_s[k]
         a_out[i] = None if a_s[k] is None else a_s[k] % 360.0
     return z_out, a_out
+
+
+def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window=None,
+                              iterations=4):
+    """Two-pass smoothing of the Sun's direction by local quadratics: at
+    every frame, the unit vector's components are fitted over its neighbours
+    in time (tricube kernel, the weights, robust bisquare weights on the
+    angle between raw and fitted Sun from the previous pass), and the fit's
+    value there is normalised. Returns (zenith list, azimuth list).
+
+    Departs from one polynomial over the whole clip (thesis: a line per
+    angle; two_pass_directions: a cubic per component): over a long day the
+    Sun's path is no low polynomial, so a global fit is off by more than the
+    measurements' noise where they are good; a local fit follows any smooth
+    path and still averages the noise and rejects outliers. `half_window`
+    (in the frames' units) defaults to enough of the clip for six measured
+    frames on either side, at least an eighth of the span."""
+    t, z, w = _arrays(frames, zenith, weights)
+    _, a, w_a = _arrays(frames, azimuth, weights)
+    w = np.where(w_a > 0, w, 0.0)
+    good = w > 0
+    n = len(t)
+    if not good.any():
+        return [None] * n, [None] * n
+    raw = np.zeros((n, 3))
+    raw[good] = _unit_vectors(z[good], a[good])
+    span = float(np.ptp(t[good]))
+    if half_window is None:
+        step = span / max(1, int(good.sum()) - 1)
+        half_window = max(span / 8.0, 6.5 * step)
+    half_window = max(float(half_window), 1e-9)
+    robust = np.ones(n)
+    fitted = np.zeros((n, 3))
+    for _ in range(iterations):
+        for i in range(n):
+            d = (t - t[i]) / half_window
+            kern = np.where(np.abs(d) < 1.0, (1.0 - np.abs(d) ** 3) ** 3, 0.0) * w * robust
+            sel = kern > 0
+            if not sel.any():  # no measured neighbour: the nearest measured frame
+                j = int(np.flatnonzero(good)[np.argmin(np.abs(t[good] - t[i]))])
+                fitted[i] = raw[j]
+                continue
+            m = int(sel.sum())
+            distinct = len(np.unique(d[sel]))
+            degree = min(2 if m >= 6 else (1 if m >= 3 else 0), distinct - 1)
+            x = np.vander(d[sel], degree + 1, increasing=True)
+            sw = np.sqrt(kern[sel])[:, None]
+            coef = np.linalg.lstsq(x * sw, raw[sel] * sw, rcond=None)[0]
+            fitted[i] = coef[0]  # the value at d = 0
+        fitted /= np.maximum(np.linalg.norm(fitted, axis=1, keepdims=True), 1e-12)
+        cross = np.linalg.norm(np.cross(raw, fitted), axis=1)
+        r = np.degrees(np.arctan2(cross, np.sum(raw * fitted, axis=1)))
+        scale = 1.4826 * float(np.median(r[good])) + 1e-3
+        c = 4.685 * scale
+        robust = np.where(r < c, (1.0 - (r / c) ** 2) ** 2, 0.0)
+    zen = np.degrees(np.arccos(np.clip(fitted[:, 2], -1.0, 1.0)))
+    azi = np.degrees(np.arctan2(fitted[:, 0], fitted[:, 1])) % 360.0
+    return [float(v) for v in zen], [float(v) for v in azi]
