@@ -17,7 +17,7 @@ from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
 from .estimate import whole_clip
-from .core import frametimes, smoothing, sunpath, trackfile
+from .core import frametimes, smoothing, suncircle, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -212,14 +212,45 @@ def _given_initial(zenith_deg, azimuth_deg, north_offset_deg):
             "ambient_intensity": None, "seconds": 0.0}
 
 
+def _sun_circle(track, numbers, raws, options, north):
+    """Physical smoothing without a place: the Sun's small circle about the
+    pole fitted to the raw Suns (core.suncircle), which also says what
+    latitude, declination and north the path implies. Same return as
+    _physical."""
+    if options.frame_times is not None:
+        seconds = frametimes.seconds_since([options.frame_times[f] for f in numbers])
+        t, real = seconds, True
+    elif options.frame_seconds:
+        t, real = [f * options.frame_seconds for f in numbers], True
+    else:
+        t, real = list(numbers), False
+    world_az = [None if r[2] is None else (r[2] + north) % 360.0 for r in raws]
+    fit = suncircle.fit_circle(t, [r[1] for r in raws], world_az, [r[3] for r in raws],
+                               times_are_seconds=real)
+    if not fit.success:
+        track.extra["smoothing_message"] = (f"physical smoothing without a place fits the Sun's "
+                                            f"circle about the pole, which failed ({fit.message}); "
+                                            f"used two_pass")
+        track.method["smoothing"] = "two_pass"
+        return None, None, north
+    track.extra["sun_circle_fit"] = {
+        "latitude_deg": fit.latitude_deg, "declination_deg": fit.declination_deg,
+        "north_offset_deg": fit.north_offset_deg, "median_residual_deg": fit.residual_deg,
+        "hour_angle_deg_first": fit.hour_angle_deg[0], "real_time": real,
+        "message": fit.message or None}
+    geo = [(a - fit.north_offset_deg) % 360.0 for a in fit.azimuth_world_deg]
+    return fit.zenith_deg, geo, fit.north_offset_deg
+
+
 def _physical(native, track, numbers, raws, options, north):
     """Fits the Sun's path through the raw angles; returns (zenith, geographic
     azimuth, north offset) per frame, or (None, None, north) with the reason
     kept in the track when the inputs are missing or the fit fails."""
-    need = (options.latitude_deg, options.longitude_deg) + (
-        (options.first_time, options.frame_seconds) if options.frame_times is None else ())
+    if options.latitude_deg is None or options.longitude_deg is None:
+        return _sun_circle(track, numbers, raws, options, north)
+    need = (options.first_time, options.frame_seconds) if options.frame_times is None else ()
     if any(v is None for v in need):
-        track.extra["smoothing_message"] = ("physical smoothing needs the place and the frames' "
+        track.extra["smoothing_message"] = ("physical smoothing with a place needs the frames' "
                                             "times (a times file, or the first frame's time "
                                             "and the seconds per frame); used two_pass")
         track.method["smoothing"] = "two_pass"

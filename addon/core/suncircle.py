@@ -1,0 +1,162 @@
+"""The Sun's path without place or date: a small circle about the pole.
+
+Over a day the Sun turns about the celestial pole at 15 deg per hour on a
+circle of constant declination. Fitted to the measured Suns (world frame),
+that circle gives, with no place, date or compass known (in the spirit of
+Junejo & Foroosh, ECCV 2008, geo-temporal localisation from shadows):
+- the pole's elevation above the horizon: the latitude;
+- the pole's azimuth in the scene: where true north is (the north offset);
+- the circle's angular radius: the declination, i.e. the date up to the
+  two days a year that share it;
+- the hour angle at each frame: solar time.
+Its values at the frames are a smoothing that knows how the Sun moves.
+When the place and date are known this is the ephemeris fit of sunpath.py.
+
+bpy-free, numpy only (a small Levenberg-Marquardt; Blender's Python has no
+scipy).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional, Sequence
+
+import numpy as np
+
+# The Sun's hour angle advances 15 deg per hour of (mean) solar time.
+DEG_PER_HOUR = 15.0
+
+
+@dataclass
+class CircleFit:
+    success: bool = False
+    message: str = ""
+    latitude_deg: Optional[float] = None
+    declination_deg: Optional[float] = None
+    # World azimuth of true north (the scene's +Y turned by this from north,
+    # as the Sun Position add-on's north offset: world = geographic + it).
+    north_offset_deg: Optional[float] = None
+    # Hour angle (deg, 0 at solar noon, positive in the afternoon) per frame.
+    hour_angle_deg: List[Optional[float]] = field(default_factory=list)
+    # The fitted Sun per frame (world frame), and the robust residual (deg).
+    zenith_deg: List[Optional[float]] = field(default_factory=list)
+    azimuth_world_deg: List[Optional[float]] = field(default_factory=list)
+    residual_deg: Optional[float] = None
+    # Westward hour angle rate (deg per second with times: 15/h; else per
+    # frame, fitted).
+    rate_deg: Optional[float] = None
+
+
+def _unit(zenith_deg, azimuth_deg) -> np.ndarray:
+    z, a = np.radians(zenith_deg), np.radians(azimuth_deg)
+    return np.stack([np.sin(z) * np.sin(a), np.sin(z) * np.cos(a), np.cos(z)], axis=-1)
+
+
+def _basis(pole_zenith, pole_azimuth):
+    p = _unit(math.degrees(pole_zenith), math.degrees(pole_azimuth))
+    # e1: the pole's meridian toward the zenith side (hour angle 0 = noon,
+    # the Sun's highest point); e2 = p x e1 points east, so the angle from
+    # e1 toward e2 is minus the (westward) hour angle.
+    up = np.array([0.0, 0.0, 1.0])
+    e1 = up - (up @ p) * p
+    norm = np.linalg.norm(e1)
+    e1 = e1 / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
+    e2 = np.cross(p, e1)
+    return p, e1, e2
+
+
+def _model(params, t, rate):
+    pz, pa, dec, h0 = params[:4]
+    r = params[4] if rate is None else rate
+    p, e1, e2 = _basis(pz, pa)
+    h = h0 + r * t
+    return (math.cos(dec) * (np.cos(h)[:, None] * e1 + np.sin(h)[:, None] * e2)
+            + math.sin(dec) * p[None, :])
+
+
+def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
+               azimuth_world_deg: Sequence[Optional[float]],
+               weights: Optional[Sequence[float]] = None, times_are_seconds: bool = True,
+               iterations: int = 60) -> CircleFit:
+    """Fits the Sun's small circle to measured Suns. `times`: seconds (real
+    time, the rate is then 15 deg/h) or frame numbers (times_are_seconds
+    False: the rate is fitted). Frames without angles are predicted too."""
+    out = CircleFit()
+    t_all = np.asarray(times, dtype=float)
+    n = len(t_all)
+    ok = np.array([z is not None and a is not None for z, a in zip(zenith_deg, azimuth_world_deg)])
+    w = np.ones(n) if weights is None else np.asarray(weights, dtype=float)
+    ok &= np.isfinite(t_all) & (w > 0)
+    if ok.sum() < 4:
+        out.message = f"needs at least 4 measured frames (has {int(ok.sum())})"
+        return out
+    t0 = float(np.median(t_all[ok]))
+    scale = 3600.0 if times_are_seconds else 1.0
+    t = (t_all - t0) / scale
+    if np.ptp(t[ok]) <= 0:
+        out.message = "the measured frames all have the same time"
+        return out
+    s = _unit(np.array([zenith_deg[i] for i in np.flatnonzero(ok)], float),
+              np.array([azimuth_world_deg[i] for i in np.flatnonzero(ok)], float))
+    tw, ww = t[ok], w[ok]
+    # Start: the plane through the measured Suns; its normal is the pole.
+    centre = (s * ww[:, None]).sum(0) / ww.sum()
+    _, _, vt = np.linalg.svd((s - centre) * np.sqrt(ww)[:, None])
+    p = vt[2]
+    steps = np.cross(s[:-1], s[1:]) @ p
+    # The Sun turns westward: clockwise about the north celestial pole.
+    order = np.sign(np.sum(steps * np.sign(np.diff(tw))))
+    if order > 0:
+        p = -p
+    # The angle about p from e1 toward e2 (east) falls as the Sun goes west.
+    rate = None if not times_are_seconds else -math.radians(DEG_PER_HOUR)
+    pz = math.acos(max(-1.0, min(1.0, p[2])))
+    pa = math.atan2(p[0], p[1])
+    dec = math.asin(max(-1.0, min(1.0, float(centre @ p) / max(1e-9, np.linalg.norm(centre)))))
+    _, e1, e2 = _basis(pz, pa)
+    hs = np.unwrap(np.arctan2(s @ e2, s @ e1))
+    if rate is None:
+        slope = np.polyfit(tw, hs, 1)[0] if np.ptp(tw) > 0 else 0.0
+        params = np.array([pz, pa, dec, float(np.median(hs - slope * tw)), slope])
+    else:
+        params = np.array([pz, pa, dec, float(np.median(hs - rate * tw))])
+    robust = np.ones(len(tw))
+    lam = 1e-3
+
+    def residuals(pr):
+        return ((_model(pr, tw, rate) - s) * np.sqrt(ww * robust)[:, None]).ravel()
+
+    for it in range(iterations):
+        r0 = residuals(params)
+        jac = np.empty((len(r0), len(params)))
+        for k in range(len(params)):
+            d = np.zeros(len(params))
+            d[k] = 1e-6
+            jac[:, k] = (residuals(params + d) - r0) / 1e-6
+        jtj, jtr = jac.T @ jac, jac.T @ r0
+        step = np.linalg.lstsq(jtj + lam * np.diag(np.diag(jtj) + 1e-9), -jtr, rcond=None)[0]
+        if float(np.sum(residuals(params + step) ** 2)) < float(np.sum(r0 ** 2)):
+            params, lam = params + step, lam * 0.3
+        else:
+            lam *= 10.0
+        if it % 10 == 9:  # robust weights (Huber on the angle), refreshed now and then
+            ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
+            k = 1.5 * (1.4826 * float(np.median(ang)) + 1e-3)
+            robust = np.where(ang <= k, 1.0, k / np.maximum(ang, 1e-12))
+    fit_all = _model(params, t, rate)
+    ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
+    p, _, _ = _basis(params[0], params[1])
+    out.success = True
+    out.latitude_deg = math.degrees(math.asin(max(-1.0, min(1.0, float(p[2])))))
+    out.declination_deg = math.degrees(params[2])
+    out.north_offset_deg = math.degrees(math.atan2(p[0], p[1])) % 360.0
+    hour = -np.degrees(params[3] + (params[4] if rate is None else rate) * t)
+    out.hour_angle_deg = [float((h + 180.0) % 360.0 - 180.0) for h in hour]
+    out.zenith_deg = [float(math.degrees(math.acos(max(-1.0, min(1.0, v[2]))))) for v in fit_all]
+    out.azimuth_world_deg = [float(math.degrees(math.atan2(v[0], v[1])) % 360.0) for v in fit_all]
+    out.residual_deg = float(np.median(ang))
+    out.rate_deg = -math.degrees(params[4] if rate is None else rate) / scale
+    if abs(out.latitude_deg) > 89.0:
+        out.message = "the pole is near the zenith: the fit cannot tell latitude from the path"
+    return out
