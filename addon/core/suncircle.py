@@ -142,8 +142,8 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
             lam *= 10.0
         if it % 10 == 9:  # robust weights (Huber on the angle), refreshed now and then
             ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
-            k = 1.5 * (1.4826 * float(np.median(ang)) + 1e-3)
-            robust = np.where(ang <= k, 1.0, k / np.maximum(ang, 1e-12))
+            huber = 1.5 * (1.4826 * float(np.median(ang)) + 1e-3)
+            robust = np.where(ang <= huber, 1.0, huber / np.maximum(ang, 1e-12))
     fit_all = _model(params, t, rate)
     ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
     p, _, _ = _basis(params[0], params[1])
