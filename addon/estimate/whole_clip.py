@@ -33,12 +33,18 @@ REFERENCE_FRAMES = 24
 # A refined Sun further than this many grid spacings from the path's
 # direction is not believed (the tracker locked onto something else).
 REFINE_MAX_SPACINGS = 2.5
-# Confidence of a frame grows with its evidence's lead over directions well
-# away from the chosen one (log-likelihood units, see sky_evidence.h): full
-# at this lead.
+# Confidence of a frame grows with the chosen path's lead over the best path
+# through a direction well away from it on that frame (log-likelihood units,
+# see sun_path.h; the frame's own evidence and its neighbours'): full at this
+# lead.
 FULL_CONFIDENCE_MARGIN = 12.0
-# Confidence of frames the path carries (no evidence of their own).
+# Confidence of frames without sky evidence of their own: carried by the
+# path alone; followed by the tracker between frames with evidence (its
+# sub-pixel fit sees thin shadows the sky's samples miss); followed past the
+# segment's last frame with evidence (times the tracker's confidence).
 CARRIED_CONFIDENCE = 0.05
+FOLLOWED_CONFIDENCE = 0.5
+FOLLOWED_BEYOND_CONFIDENCE = 0.25
 
 
 @dataclass
@@ -166,7 +172,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     measured = path["measured"]
     result.evidence = {"explained": [round(float(v), 3) for v in path["explained"]],
                        "margin": [round(float(v), 2) for v in margins],
-                       "significance": [round(float(v), 1) for v in path["significance"]]}
+                       "significance": [round(float(v), 1) for v in path["significance"]],
+                       "path_margin": [round(float(v), 1) for v in path["path_margin"]]}
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None
 
@@ -189,8 +196,10 @@ def estimate(native, scene, camera, frames: Sequence[int],
             if status[k] != ok and status[k] != native.FrameEvidenceStatus.NO_SHADOWS:
                 raw.reason = reasons[k] or "no evidence on this frame"
                 continue
-            if first is None or last is None or not first <= k <= last:
-                # Beyond the segment's measured frames: nothing to carry.
+            beyond = first is None or last is None or not first <= k <= last
+            if beyond and not follow:
+                # Before or after the segment's measured frames, with no
+                # tracked shadow to follow: nothing to carry.
                 raw.reason = "no shadow evidence on this frame or around it in its segment"
                 continue
             d = directions[path["direction"][k]]
@@ -210,12 +219,18 @@ def estimate(native, scene, camera, frames: Sequence[int],
                         refined = r
                         break
             follow = refined is not None
-            support = max(0.0, min(1.0, margins[k] / FULL_CONFIDENCE_MARGIN))
+            support = max(0.0, min(1.0, path["path_margin"][k] / FULL_CONFIDENCE_MARGIN))
+            if beyond and refined is None:
+                raw.reason = "shadow lost after the last frame with shadow evidence"
+                continue
             if refined is not None:
                 raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg
                 raw.refined, raw.tracked = True, refined
-                raw.confidence = refined.confidence * (
-                    support if measured[k] else CARRIED_CONFIDENCE)
+                if measured[k]:
+                    raw.confidence = refined.confidence * support
+                else:
+                    raw.confidence = refined.confidence * (
+                        FOLLOWED_BEYOND_CONFIDENCE if beyond else FOLLOWED_CONFIDENCE)
             else:
                 raw.zenith_deg, raw.azimuth_world_deg = angles_of(d)
                 raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE

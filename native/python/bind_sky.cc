@@ -150,6 +150,7 @@ void BindSky(py::module_& m) {
         out["explained"] = r.explained;
         out["margin"] = r.margin;
         out["significance"] = r.significance;
+        out["path_margin"] = r.path_margin;
         out["cost"] = r.cost;
         return out;
       },

@@ -25,8 +25,8 @@ def test_frames_are_tracked_in_the_order_they_were_taken(tiny_plaza, tmp_path):
     t = local_times(truth)
     step = t[1] - t[0]
     # Frame 1 is said to be the last capture (as the March sundial clip's is):
-    # the run starts on frame 2, tracks 2 -> 3 -> 1, and frame 1 still gets
-    # its own Sun (the images are what they are; only the order changes).
+    # the run takes the frames as 2, 3, 1, and frame 1 still gets its own
+    # Sun (the images are what they are; only the order changes).
     rows = [(1, t[-1] + step), (2, t[1]), (3, t[2])]
     times = write_times(tmp_path / "t.csv", rows)
     path = str(tmp_path / "o.sun.json")
@@ -34,7 +34,6 @@ def test_frames_are_tracked_in_the_order_they_were_taken(tiny_plaza, tmp_path):
                         "--utc-offset", "2")
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(path))
-    assert track["initial"]["frame"] == 2
     assert track["frame_times"]["out_of_order_frames"] == [2]
     for f, (_, when) in zip(track["frames"], rows):
         utc = (when - dt.timedelta(hours=2)).replace(tzinfo=dt.timezone.utc)
@@ -77,8 +76,8 @@ def test_a_times_file_that_misses_frames_is_a_clear_error(tiny_plaza, tmp_path):
 
 
 def test_a_first_frame_without_a_clear_sun_is_tracked_back_from_the_next(tiny_plaza, tmp_path):
-    """Frame 1 is black: the run anchors on frame 2 (the first with a clear
-    Sun), tracks forward, then back to frame 1, which keeps its reason."""
+    """Frame 1 is black: it gets no angles and says why; the frames after
+    it are found as if it were not there."""
     import shutil
 
     import bpy
@@ -105,8 +104,7 @@ def test_a_first_frame_without_a_clear_sun_is_tracked_back_from_the_next(tiny_pl
     proc = run_estimate(blend, path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(path))
-    assert track["initial"]["frame"] == 2
-    assert [t["frame"] for t in track["initial_tries"]] == [1, 2]
+    assert track["initial"]["frame"] in (2, 3)
     f1, f2, f3 = track["frames"]
     assert f1["raw_zenith_deg"] is None and "black" in f1["reason"]
     for f, ref in ((f2, truth.frames[1]), (f3, truth.frames[2])):

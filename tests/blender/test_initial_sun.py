@@ -39,7 +39,10 @@ def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
     proc = run_estimate(os.path.join(out, "scene.blend"), track_path, "--method", method)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(track_path))
-    assert track["method"]["initial"] == method and track["method"]["tracking"] == method
+    # Ours finds the Sun over the whole clip at once (no initial estimate on
+    # one frame); the thesis's baseline starts from frame 1.
+    expected = "whole_clip" if method == "default" else method
+    assert track["method"]["initial"] == expected and track["method"]["tracking"] == expected
     assert [f["frame"] for f in track["frames"]] == [1, 2, 3]
     # The tiny plaza is sunny on every frame: both methods find an initial
     # Sun and measure every frame (no frame without angles).
@@ -62,9 +65,10 @@ def test_scripted_run_estimates_every_frame(tiny_plaza, tmp_path, method):
             assert f["shadow"]["end_px"] and f["confidence"] > 0
 
 
-def test_a_wrong_start_is_found_again_from_scratch(tiny_plaza, tmp_path):
-    # Start the tracker 40 deg off: it loses the shadows, the Sun is searched
-    # for again on a later frame, and from there the track is right.
+def test_a_wrong_given_start_is_never_confidently_wrong(tiny_plaza, tmp_path):
+    # --initial-sun measures the tracker alone from a given Sun. Started 40
+    # deg off, it cannot follow the shadows: every frame it reports is
+    # either right or doubtful, never a confident wrong Sun.
     out, truth = tiny_plaza
     f1 = truth.frames[0]
     wrong_azimuth = azimuth_world_from_geographic(f1.azimuth_deg + 40.0, truth.north_offset_deg)
@@ -73,8 +77,12 @@ def test_a_wrong_start_is_found_again_from_scratch(tiny_plaza, tmp_path):
                         "--initial-sun", str(f1.zenith_deg), str(wrong_azimuth))
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(track_path))
-    assert track["reacquired_frames"] == [3]
-    last, t = track["frames"][-1], truth.frames[-1]
-    est = sun_in_world_from_geographic(last["raw_zenith_deg"], last["raw_azimuth_deg"],
-                                       track["north_offset_deg"])
-    assert angle_between_deg(est, truth_dir(truth, t.frame)) < 5.0
+    assert track["method"]["initial"] == "given"
+    for f, t in list(zip(track["frames"], truth.frames))[1:]:
+        if f["raw_zenith_deg"] is None:
+            assert f["reason"] and f["confidence"] == 0.0, f
+            continue
+        est = sun_in_world_from_geographic(f["raw_zenith_deg"], f["raw_azimuth_deg"],
+                                           track["north_offset_deg"])
+        if angle_between_deg(est, truth_dir(truth, t.frame)) > 5.0:
+            assert f["confidence"] < 0.8, f

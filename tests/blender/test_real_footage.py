@@ -38,24 +38,18 @@ def test_march_clip_follows_the_ephemeris(tmp_path, native):
     truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),
                              native.sun_position)
     raw = real.raw_view(track)
-    # The tracker measures all but a few frames: measured, frame 1 (18:08,
-    # the Sun 83 deg from the zenith, no sun/shade contrast left) and frames
-    # 13 and 15 (no match near the predicted Sun). Those say so (no raw
-    # angles, confidence 0) and are carried by their neighbours: their
-    # smoothed angles follow the ephemeris too (measured 0.5-3.5 deg zenith,
-    # the dial's own bias, and 0.1-1.4 deg azimuth).
+    # Every frame is measured but frame 1 (18:08, the Sun 83 deg from the
+    # zenith, the last capture: past the last frame with shadow evidence,
+    # so nothing is extrapolated to it): it says why and has no angles.
     unmeasured = [f for f in track.frames if f.raw_zenith_deg is None]
-    assert {f.frame for f in unmeasured} <= {1, 13, 15}, \
-        [(f.frame, f.reason) for f in unmeasured]
+    assert {f.frame for f in unmeasured} <= {1}, [(f.frame, f.reason) for f in unmeasured]
     for f in unmeasured:
-        assert f.confidence == 0.0, (f.frame, f.confidence)
-        t = truth.frame(f.frame)
-        assert f.has_estimate and abs(f.zenith_deg - t.zenith_deg) < 4.5, (f.frame, f.zenith_deg)
-        assert evaluation.azimuth_difference_deg(f.azimuth_deg, t.azimuth_deg) < 3.0, f.frame
-    r = evaluation.evaluate("march", real.confident_only(raw), truth)
-    assert r.frames_estimated >= 30
-    # Measured 0.76 mean / 1.53 max azimuth and 2.87 mean zenith (the dial's
-    # own +2-3.6 deg bias, see README); bounds leave room, not the targets.
+        assert f.confidence == 0.0 and f.reason and not f.has_estimate, f
+    r = evaluation.evaluate("march", raw, truth)
+    assert r.frames_estimated >= 38
+    # Every raw frame, confident or not. Measured 0.67 mean / 2.29 max
+    # azimuth and 2.57 mean zenith (the dial's own +2-3.6 deg bias, see
+    # README); bounds leave room, not the targets.
     assert r.azimuth.mean < 1.5 and r.azimuth.max < 3.0
     assert r.zenith.mean < 4.0
     # Frame 1 (18:08) is stored first but taken last: tracked in capture

@@ -139,7 +139,7 @@ TEST(SunPath, BrokenFramesAreCarriedByTheirNeighbours) {
   }
   const SunPathResult path = SolveSunPath(ev, {}, {}, SunPathOptions());
   ASSERT_EQ(path.status, SunPathResult::Status::kSuccess) << path.message;
-  const double tolerance = 1.5 * ev.grid().spacing_deg();
+  const double tolerance = 2.0 * ev.grid().spacing_deg();
   for (int f = 0; f < n; ++f) {
     const bool bad = std::find(broken.begin(), broken.end(), f) != broken.end();
     EXPECT_LT(PathError(ev, path, clip.truth, f),

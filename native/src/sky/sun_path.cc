@@ -54,6 +54,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   out.explained.assign(T, 0.f);
   out.margin.assign(T, 0.f);
   out.significance.assign(T, 0.f);
+  out.path_margin.assign(T, 0.f);
   if (T == 0) {
     out.message = "no frames";
     return out;
@@ -79,41 +80,56 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     return std::max(o.max_step_deg, slack);
   };
 
-  std::vector<double> cost(D), next(D);
-  std::vector<int> back(static_cast<size_t>(T) * D,
-                        -1);  // -1: segment start or jump
-  std::vector<uint8_t> jumped(static_cast<size_t>(T) * D, 0);
-  for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
-  for (int t = 1; t < T; ++t) {
+  // One step of the recursion between frame t-1 and frame t (symmetric, so
+  // it serves both directions): out[d] = min over p of in[p] + the step's
+  // cost, or a jump from the best of `in`, or no step at a segment start.
+  auto relax = [&](const std::vector<double>& in, int t,
+                   std::vector<double>* out_cost, int* back_row,
+                   uint8_t* jumped_row) {
     const bool hard = !segment_start.empty() && segment_start[t];
-    const double prev_min = *std::min_element(cost.begin(), cost.end());
-    const int prev_arg = static_cast<int>(
-        std::min_element(cost.begin(), cost.end()) - cost.begin());
+    const auto best_in = std::min_element(in.begin(), in.end());
+    const double in_min = *best_in;
+    const int in_arg = static_cast<int>(best_in - in.begin());
     const double r = radius(t);
     for (int d = 0; d < D; ++d) {
       double c = kInf;
       int arg = -1;
       bool jump = false;
       if (hard) {
-        c = prev_min;
+        c = in_min, arg = in_arg;
       } else {
         for (int p : grid.Within(d, r)) {
           const double ang =
               std::acos(std::clamp(grid.direction(p).dot(grid.direction(d)),
                                    -1.0, 1.0)) /
               kDeg;
-          const double step = cost[p] + o.step_weight * (ang / r) * (ang / r);
+          const double step = in[p] + o.step_weight * (ang / r) * (ang / r);
           if (step < c) c = step, arg = p;
         }
-        if (o.jump_cost >= 0 && prev_min + o.jump_cost < c) {
-          c = prev_min + o.jump_cost, arg = prev_arg, jump = true;
+        if (o.jump_cost >= 0 && in_min + o.jump_cost < c) {
+          c = in_min + o.jump_cost, arg = in_arg, jump = true;
         }
       }
-      next[d] = c + o.evidence_weight * cost_of(t, d);
-      back[static_cast<size_t>(t) * D + d] = hard ? prev_arg : arg;
-      jumped[static_cast<size_t>(t) * D + d] = hard || jump;
+      (*out_cost)[d] = c;
+      if (back_row) back_row[d] = arg;
+      if (jumped_row) jumped_row[d] = hard || jump;
     }
+  };
+
+  // Forward: alpha[t][d], the best path's cost over frames 0..t ending at d.
+  std::vector<float> alpha(static_cast<size_t>(T) * D);
+  std::vector<double> cost(D), next(D);
+  std::vector<int> back(static_cast<size_t>(T) * D, -1);
+  std::vector<uint8_t> jumped(static_cast<size_t>(T) * D, 0);
+  for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
+  std::copy(cost.begin(), cost.end(), alpha.begin());
+  for (int t = 1; t < T; ++t) {
+    relax(cost, t, &next, &back[static_cast<size_t>(t) * D],
+          &jumped[static_cast<size_t>(t) * D]);
+    for (int d = 0; d < D; ++d) next[d] += o.evidence_weight * cost_of(t, d);
     std::swap(cost, next);
+    std::copy(cost.begin(), cost.end(),
+              alpha.begin() + static_cast<size_t>(t) * D);
   }
   int d = static_cast<int>(std::min_element(cost.begin(), cost.end()) -
                            cost.begin());
@@ -124,6 +140,22 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       out.jump_before[t] = jumped[static_cast<size_t>(t) * D + d];
       d = back[static_cast<size_t>(t) * D + d];
     }
+  }
+  // Backward: beta[d] at frame t, the best cost of frames t+1..T-1 from d;
+  // alpha + beta is the best whole path through (t, d). The path's own
+  // margin at t: how much more the best path through a far direction costs.
+  std::vector<double> beta(D, 0.0), ahead(D), beta_next(D);
+  std::vector<std::vector<double>> through(T);
+  for (int t = T - 1; t >= 0; --t) {
+    if (t < T - 1) {
+      for (int d = 0; d < D; ++d)
+        ahead[d] = beta[d] + o.evidence_weight * cost_of(t + 1, d);
+      relax(ahead, t + 1, &beta_next, nullptr, nullptr);
+      std::swap(beta, beta_next);
+    }
+    through[t].resize(D);
+    for (int d = 0; d < D; ++d)
+      through[t][d] = alpha[static_cast<size_t>(t) * D + d] + beta[d];
   }
   // Per frame: the frame's own support for the chosen direction: how much
   // more the best direction well away from it costs (log-likelihood).
@@ -141,6 +173,14 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     out.explained[t] = static_cast<float>(evidence.BestExplained(t));
     out.significance[t] = static_cast<float>(evidence.Significance(t));
     out.margin[t] = static_cast<float>(rival - own);
+    double path_rival = kInf;
+    for (int k = 0; k < D; ++k) {
+      if (grid.direction(k).dot(grid.direction(c)) < cos_x) {
+        path_rival = std::min(path_rival, through[t][k]);
+      }
+    }
+    out.path_margin[t] =
+        static_cast<float>(std::min(1e6, path_rival - through[t][c]));
     out.measured[t] = out.significance[t] >= o.min_significance &&
                       out.margin[t] >= o.min_margin;
   }

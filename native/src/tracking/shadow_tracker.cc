@@ -722,7 +722,9 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
       std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
   // The search starts at twice the last frame's correction of the prediction
   // (a steady Sun needs few evaluations), at most search_step_deg.
-  const double step = s.lost > 0
+  // A given prediction (a whole-clip path's grid cell) may be a few degrees
+  // off: it is searched around as widely as after a loss.
+  const double step = (s.lost > 0 || given)
                           ? 4.0 * s.o.search_step_deg
                           : std::clamp(2.0 * s.last_correction_deg,
                                        std::max(0.05, 2 * s.o.tolerance_deg),

@@ -29,7 +29,7 @@ struct SunPathOptions {
   // Negative: jumps are not allowed.
   double jump_cost = 40.0;
   // Largest Sun motion per frame when the frames' times are unknown (deg).
-  double max_step_deg = 6.0;
+  double max_step_deg = 12.0;
   // Apparent angular speed bound of the Sun (deg per hour) when times are
   // known, plus the grid's quantisation (1.5 spacings) as slack.
   double max_speed_deg_per_hour = 15.5;
@@ -62,6 +62,10 @@ struct SunPathResult {
   std::vector<float> explained;
   std::vector<float> margin;
   std::vector<float> significance;
+  // Per frame: how much more the best whole path through a direction
+  // rival_exclusion_deg away costs than the chosen path (log-likelihood):
+  // the frame's support including its neighbours'.
+  std::vector<float> path_margin;
   double cost = 0.0;
 };
 
