@@ -34,8 +34,12 @@ def load_track():
     if text is None:
         return None
     try:
-        return trackfile.from_json(json.loads(text.as_string()), source=TEXT_NAME)
-    except (ValueError, trackfile.TrackFileError):
+        # Validated once here (trackfile.loads): the panel, overlay, Apply and
+        # Export may trust what they get. A track edited into nonsense in the
+        # Text Editor reads as no track.
+        return trackfile.loads(text.as_string(), source=TEXT_NAME)
+    except trackfile.TrackFileError as e:
+        print(f"sunlapse: warning: the stored track is unusable: {e}")
         return None
 
 
