@@ -47,6 +47,30 @@ def estimated_frames(track):
     return [f for f in track.frames if f.has_estimate]
 
 
+def measured_span(track):
+    """(first, last) frame with a measured (raw) Sun, or None."""
+    measured = [f.frame for f in track.frames
+                if f.raw_zenith_deg is not None and f.raw_azimuth_deg is not None]
+    return (min(measured), max(measured)) if measured else None
+
+
+def extrapolated_frames(track):
+    """Frames whose Sun only extrapolates the smoothing beyond the measured
+    frames (a clip that ended early, frames lost at its start or end): no
+    measurement backs them, so they are not keyed."""
+    span = measured_span(track)
+    if span is None:  # no raw angles at all (a truth file): nothing tells
+        return []
+    return [f.frame for f in track.frames
+            if f.has_estimate and not span[0] <= f.frame <= span[1]]
+
+
+def keyable_frames(track):
+    """Estimated frames within the measured span (interpolated gaps included)."""
+    skip = set(extrapolated_frames(track))
+    return [f for f in estimated_frames(track) if f.frame not in skip]
+
+
 def _remove_own_keys(obj, paths, frames):
     """Deletes the keyframes sunlapse put on `paths` at `frames`; the user's
     other keys (other frames, other properties) stay."""
@@ -111,11 +135,13 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
     """Keys the Sun lamp (created if needed) on every estimated frame; returns it.
 
     Running it again replaces its own keys only. With keyframe_strength the
-    lamp's strength follows the measured sun/ambient ratio.
+    lamp's strength follows the measured sun/ambient ratio. Frames that only
+    extrapolate beyond the measured ones are not keyed (extrapolated_frames).
     """
-    frames = estimated_frames(track)
+    frames = keyable_frames(track)
     if not frames:
-        raise ValueError("the track has no estimated frame to apply")
+        raise ValueError("the track has no measured frame to apply (run Estimate Sun on "
+                         "frames that show the scene)")
     sun = lamp.ensure_sun_lamp(context, sun_obj)
     paths = {"rotation_euler", "rotation_quaternion", "rotation_axis_angle"}
     _remove_own_keys(sun, paths, sun.get(KEYED_FRAMES_PROP, []))
@@ -143,17 +169,28 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
 
 
 def export_csv(track, path):
-    """frame, zenith_deg, azimuth_deg, confidence (one row per frame)."""
-    tmp = path + ".tmp"
-    with open(tmp, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(["frame", "zenith_deg", "azimuth_deg", "confidence"])
-        for f in track.frames:
-            w.writerow([f.frame,
-                        "" if f.zenith_deg is None else f"{f.zenith_deg:.6f}",
-                        "" if f.azimuth_deg is None else f"{f.azimuth_deg:.6f}",
-                        f"{f.confidence:.4f}"])
-    os.replace(tmp, path)
+    """frame, zenith_deg, azimuth_deg, confidence (one row per frame),
+    written atomically (a temporary file in the same folder, renamed)."""
+    import tempfile
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".csv", dir=folder)
+    try:
+        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(["frame", "zenith_deg", "azimuth_deg", "confidence"])
+            for f in track.frames:
+                w.writerow([f.frame,
+                            "" if f.zenith_deg is None else f"{f.zenith_deg:.6f}",
+                            "" if f.azimuth_deg is None else f"{f.azimuth_deg:.6f}",
+                            f"{f.confidence:.4f}"])
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 def export_gltf(context, sun_obj, path):
