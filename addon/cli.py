@@ -288,8 +288,11 @@ def fail(code, message):
 class _Interrupt:
     """Ctrl-C in a scripted run: Blender's own handler only flags the first
     one (its render loop looks; our loop never did) and kills on the second.
-    Ours flags it too; the run's progress callback then cancels at the next
-    frame, and every later step checks before it writes anything."""
+    Ours raises KeyboardInterrupt in the Python code running (the shadow
+    search, the tracking loop) and flags it, for native work: the run's
+    progress callback then cancels it, and every later step checks before it
+    writes anything. Outputs are written last and atomically, so an
+    interrupt at any point leaves existing files as they were."""
 
     def __init__(self):
         self.hit = False
@@ -306,6 +309,7 @@ class _Interrupt:
         if self.hit:  # a second Ctrl-C: the user insists
             os._exit(EXIT_INTERRUPTED)
         self.hit = True
+        raise KeyboardInterrupt
 
     def __exit__(self, *exc):
         if self.previous is not None:
@@ -392,6 +396,9 @@ def _run(argv, interrupt):
             print(f"sunlapse: warning: the times file gives every frame of {frames[0]}-"
                   f"{frames[1]} the same time: frames are smoothed in frame order")
         interrupt.check()
+        # Flushed: a wrapper (or a test) waiting for the work to start sees it.
+        print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "
+              f"(Ctrl-C stops)", flush=True)
         track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers,
                              options, progress=interrupt.progress)
     except bridge.SceneError as e:
@@ -467,7 +474,8 @@ def main(argv):
         except SystemExit as e:  # argparse: usage already printed
             return int(e.code or 0) and EXIT_USAGE
         except KeyboardInterrupt:
-            message, code = "interrupted (Ctrl-C)", EXIT_INTERRUPTED
+            message, code = ("interrupted (Ctrl-C): nothing written, existing files left as "
+                             "they were"), EXIT_INTERRUPTED
         except Exception as e:  # an internal bug: still one line, non-zero exit
             import traceback
             traceback.print_exc()
