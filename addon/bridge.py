@@ -125,11 +125,14 @@ def gather_model(context, collection: Optional[bpy.types.Collection] = None,
             continue
         world, tri = arrays
         name = original.name if parent is None else f"{parent.name}/{original.name}"
-        if not np.all(np.isfinite(world)):
+        # Blender clamps an infinite transform to 3.4e38, finite but no place.
+        usable = np.all(np.isfinite(world) & (np.abs(world) < 1e9), axis=1)
+        if not np.all(usable):
             # Embree and the estimators cannot use such a vertex; say where it is.
-            bad = int(np.count_nonzero(~np.all(np.isfinite(world), axis=1)))
-            raise SceneError(f"Object '{name}' has {bad} vertex/vertices with a NaN or "
-                             "infinite coordinate (or an object transform that makes one): "
+            bad = int(np.count_nonzero(~usable))
+            raise SceneError(f"Object '{name}' has {bad} vertex/vertices with a NaN, "
+                             "infinite or absurd (beyond 1e9 m) coordinate, or an object "
+                             "transform that makes one: "
                              "fix or delete them (Mesh › Clean Up), or leave the object out "
                              "of the model collection.")
         ids.append(np.full(len(tri), len(names), dtype=np.int32))

@@ -328,11 +328,11 @@ class _Interrupt:
 def save_blend_atomically(path):
     """Saves a copy of the open .blend to `path` through a temporary file in
     the same folder (an interrupted or failed save leaves `path` as it was)."""
-    import tempfile
+    import uuid
     import bpy
     full = os.path.abspath(path)
-    fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".blend", dir=os.path.dirname(full))
-    os.close(fd)
+    # A name not yet taken (an existing file would get a .blend1 backup).
+    tmp = os.path.join(os.path.dirname(full), f".sunlapse-{uuid.uuid4().hex}.blend")
     try:
         result = bpy.ops.wm.save_as_mainfile(filepath=tmp, copy=True)
         if result != {"FINISHED"} or not os.path.getsize(tmp):
@@ -342,7 +342,7 @@ def save_blend_atomically(path):
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, full)
     finally:
-        for leftover in (tmp, tmp + "@"):
+        for leftover in (tmp, tmp + "@", tmp + "1"):
             if os.path.exists(leftover):
                 os.unlink(leftover)
 

@@ -118,16 +118,36 @@ def to_json(track: Track) -> Dict[str, Any]:
     return _clean(d)
 
 
+# Fields that measure how long the run took: the only ones two runs of the
+# same input and options may differ in.
+TIMING_KEYS = ("timing",)            # top level
+INITIAL_TIMING_KEYS = ("seconds",)   # in "initial"
+
+
+def without_timings(d: Dict[str, Any]) -> Dict[str, Any]:
+    """A track file's JSON without its timing fields: what a byte-compare of
+    two runs should see (to_text(without_timings(json.load(...))))."""
+    out = {k: v for k, v in d.items() if k not in TIMING_KEYS}
+    if isinstance(out.get("initial"), dict):
+        out["initial"] = {k: v for k, v in out["initial"].items()
+                          if k not in INITIAL_TIMING_KEYS}
+    return out
+
+
+def to_text(d: Dict[str, Any]) -> str:
+    """The exact text write_track writes for the JSON `d`."""
+    return json.dumps(d, indent=1, allow_nan=False) + "\n"
+
+
 def write_track(path: str, track: Track) -> None:
     """Writes atomically: a crash mid-write never leaves a half file behind."""
-    text = json.dumps(to_json(track), indent=1, allow_nan=False)
+    text = to_text(to_json(track))
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".json", dir=folder)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
-            fh.write("\n")
         # mkstemp makes the file private; give it the usual mode.
         umask = os.umask(0)
         os.umask(umask)
@@ -155,10 +175,8 @@ def _number(value: Any, what: str, low: float = -math.inf, high: float = math.in
         raise ValueError(f"{what} is {value!r}, not a number")
     value = float(value)
     if not math.isfinite(value):
-        # JSON has no NaN; a file with one was not written by us. Angles may
-        # be null (no estimate), other numbers must be real.
-        if allow_null:
-            return None
+        # JSON has no NaN (our writer turns one into null): a file with one
+        # was not written by us, and a NaN read as 0 would be a wrong answer.
         raise ValueError(f"{what} is {value}, not a finite number")
     if not low <= value <= high:
         raise ValueError(f"{what} is {value}, outside [{low:g}, {high:g}]")
