@@ -503,3 +503,47 @@ def test_same_input_gives_the_same_track_file(tmp_path):
         texts.append(trackfile.to_text(trackfile.without_timings(json.loads(text))))
     assert texts[0] == texts[1]
     assert json.loads(texts[0])["frames"] and "timing" not in json.loads(texts[0])
+
+
+def test_stored_track_fuzzed_is_refused_or_usable_everywhere(empty_scene, tmp_path):
+    """Property-based: a stored track with fields replaced by arbitrary JSON
+    is either no track, or one the overlay plot, the panel's summary, Apply
+    and the CSV export all take without an exception."""
+    from hypothesis import HealthCheck, given, settings, strategies as st
+    from sunlapse import overlay, results
+    good = {"format": "sunlapse.track", "version": 1, "clip": "c.png", "frame_start": 1,
+            "north_offset_deg": 5.0, "method": {}, "initial": None,
+            "frames": [{"frame": k, "zenith_deg": 40.0 + k, "azimuth_deg": 100.0 + k,
+                        "raw_zenith_deg": 40.0 + k, "raw_azimuth_deg": 100.0 + k,
+                        "confidence": 0.9, "reason": None,
+                        "shadow": {"start_px": [1, 2], "end_px": [3, 4]}} for k in (1, 2, 3)]}
+    values = st.recursive(st.none() | st.booleans() | st.integers(-10 ** 12, 10 ** 12) |
+                          st.floats() | st.text(max_size=5),
+                          lambda inner: st.lists(inner, max_size=3) |
+                          st.dictionaries(st.text(max_size=4), inner, max_size=3), max_leaves=8)
+    top = st.sampled_from(sorted(good))
+    frame_keys = st.sampled_from(sorted(good["frames"][0]))
+
+    @settings(max_examples=int(os.environ.get("SUNLAPSE_FUZZ_EXAMPLES", 60)), deadline=None,
+              derandomize=True, suppress_health_check=list(HealthCheck))
+    @given(top, frame_keys, st.integers(0, 2), values, values)
+    def check(key, frame_key, index, value_top, value_frame):
+        d = json.loads(json.dumps(good))
+        d["frames"][index][frame_key] = value_frame
+        d[key] = value_top
+        text = bpy.data.texts.get(results.TEXT_NAME) or bpy.data.texts.new(results.TEXT_NAME)
+        text.clear()
+        text.write(json.dumps(d))
+        track = results.load_track()
+        if track is None:
+            return
+        overlay._series_plot(track, 2, 0, 0, 100, 50)
+        est = track.frame(2)
+        if est is not None and est.has_estimate:
+            f"{est.zenith_deg:.2f} {est.azimuth_deg:.2f} {est.confidence:.2f}"
+        results.export_csv(track, str(tmp_path / "t.csv"))
+        try:
+            results.apply_track(bpy.context, track)
+        except ValueError as e:  # nothing to key: a message, not a crash
+            assert "no measured frame" in str(e)
+    check()
