@@ -148,11 +148,11 @@ def check_flags(args):
             parse_clock(args.start_time)
         except ValueError as e:
             fail(EXIT_USAGE, str(e))
-    if args.times is not None:
+    if args.times is not None:  # a times file's faults are input faults, as its lines'
         if not os.path.exists(args.times):
-            fail(EXIT_USAGE, f"--times {args.times}: no such file")
+            fail(EXIT_SCENE, f"--times {args.times}: no such file")
         if os.path.isdir(args.times):
-            fail(EXIT_USAGE, f"--times {args.times} is a folder; give the times CSV file")
+            fail(EXIT_SCENE, f"--times {args.times} is a folder; give the times CSV file")
     outputs = [("--out", args.out), ("--save", args.save)]
     for flag, path in outputs:
         if path is not None:

@@ -176,7 +176,6 @@ def test_apply_lamp_with_nothing_to_apply_writes_no_track(empty_scene, tmp_path,
     (["--smoothing", "physical", "--frame-seconds", "0"], ["--frame-seconds", "positive"]),
     (["--frame-seconds", "-3"], ["--frame-seconds", "positive"]),
     (["--frames", "2:9"], ["--frames", "outside"]),
-    (["--times", "no-such.csv"], ["--times", "no such file"]),
     (["--smoothing", "sideways"], ["--smoothing", "invalid choice"]),
 ])
 def test_bad_flags_exit_2_naming_the_flag(blend, tmp_path, capsys, flags, words):
@@ -186,9 +185,11 @@ def test_bad_flags_exit_2_naming_the_flag(blend, tmp_path, capsys, flags, words)
     assert not out.exists()
 
 
-def test_times_folder_instead_of_file(blend, tmp_path, capsys):
+def test_times_file_missing_or_a_folder(blend, tmp_path, capsys):
+    code, _, err = cli_run(capsys, "--out", tmp_path / "o.json", "--times", tmp_path / "no.csv")
+    assert_clear_error(code, err, 3, "--times", "no such file")
     code, _, err = cli_run(capsys, "--out", tmp_path / "o.json", "--times", tmp_path)
-    assert_clear_error(code, err, 2, "--times", "folder")
+    assert_clear_error(code, err, 3, "--times", "folder")
 
 
 def test_physical_smoothing_without_place_names_what_is_missing(blend, tmp_path, capsys):
