@@ -368,6 +368,8 @@ def _run(argv, interrupt):
         clip = bridge.gather_clip(context)
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))
+    if not hasattr(bpy.types.Scene, "sunlapse"):
+        register()  # properties and operators, as in the UI; the panel's times file
     times_path = os.path.abspath(args.times) if args.times else None
     settings_times = getattr(getattr(context.scene, "sunlapse", None), "times_file", "")
     check_not_inputs(args, bpy.data.filepath, clip,
@@ -377,8 +379,6 @@ def _run(argv, interrupt):
     except ValueError as e:
         fail(EXIT_USAGE, str(e))
 
-    if not hasattr(bpy.types.Scene, "sunlapse"):
-        register()  # properties and operators, as in the UI
     try:
         scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
             context, collection=collection, ground=args.ground, frames=frames,
