@@ -548,3 +548,18 @@ def test_stored_track_fuzzed_is_refused_or_usable_everywhere(empty_scene, tmp_pa
         except ValueError as e:  # nothing to key: a message, not a crash
             assert "no measured frame" in str(e)
     check()
+
+
+def test_same_input_gives_the_same_track_file_on_a_rendered_scene(tiny_plaza, tmp_path):
+    # The generated scene (no footage needed): two runs, one file, timings aside.
+    from sunlapse.core import trackfile
+    folder, _ = tiny_plaza
+    texts = []
+    for k in range(2):
+        out = str(tmp_path / f"run{k}.sun.json")
+        proc = run_estimate(os.path.join(folder, "scene.blend"), out, "--smoothing", "online")
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        with open(out, encoding="utf-8") as fh:
+            texts.append(trackfile.to_text(trackfile.without_timings(json.load(fh))))
+    assert texts[0] == texts[1]
+    assert sum(f["raw_zenith_deg"] is not None for f in json.loads(texts[0])["frames"]) == 3
