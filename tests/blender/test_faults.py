@@ -526,7 +526,7 @@ def test_stored_track_fuzzed_is_refused_or_usable_everywhere(empty_scene, tmp_pa
     frame_keys = st.sampled_from(sorted(good["frames"][0]))
 
     @settings(max_examples=int(os.environ.get("SUNLAPSE_FUZZ_EXAMPLES", 60)), deadline=None,
-              derandomize=True, suppress_health_check=list(HealthCheck))
+              derandomize=True, database=None, suppress_health_check=list(HealthCheck))
     @given(top, frame_keys, st.integers(0, 2), values, values)
     def check(key, frame_key, index, value_top, value_frame):
         d = json.loads(json.dumps(good))

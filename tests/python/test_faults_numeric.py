@@ -70,7 +70,8 @@ def smoothing_inputs(draw):
     return frames, draw(angle_lists(n)), draw(angle_lists(n)), weights
 
 
-@settings(max_examples=int(os.environ.get("SUNLAPSE_FUZZ_EXAMPLES", 60)), deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=int(os.environ.get("SUNLAPSE_FUZZ_EXAMPLES", 60)), deadline=None,
+          derandomize=True, database=None, suppress_health_check=list(HealthCheck))
 @given(smoothing_inputs(), st.sampled_from(["online", "two_pass"]),
        st.sampled_from(["angles", "directions"]), st.integers(0, 4))
 def test_smoothing_never_raises_on_any_numbers(inputs, mode, space, degree):

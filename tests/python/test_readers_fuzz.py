@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from core import frametimes, trackfile
 
 EXAMPLES = int(os.environ.get("SUNLAPSE_FUZZ_EXAMPLES", 150))
-FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
 
 json_values = st.recursive(
