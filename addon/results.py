@@ -208,14 +208,25 @@ def export_gltf(context, sun_obj, path):
             o.select_set(False)
         sun_obj.select_set(True)
         view_layer.objects.active = sun_obj
-        kwargs = dict(filepath=path, export_format="GLB", use_selection=True,
+        # Through a temporary file in the same folder, renamed: a failed
+        # export leaves an existing file as it was.
+        import uuid
+        tmp = os.path.join(os.path.dirname(os.path.abspath(path)),
+                           f".sunlapse-{uuid.uuid4().hex}.glb")
+        kwargs = dict(filepath=tmp, export_format="GLB", use_selection=True,
                       export_animations=True, export_force_sampling=True)
         # The option that turns lights on was renamed across Blender versions.
         props = bpy.ops.export_scene.gltf.get_rna_type().properties
         for name in ("export_lights", "export_punctual_lights"):
             if name in props:
                 kwargs[name] = True
-        result = bpy.ops.export_scene.gltf(**kwargs)
+        try:
+            result = bpy.ops.export_scene.gltf(**kwargs)
+            if result == {"FINISHED"} and os.path.exists(tmp):
+                os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
     finally:
         sun_obj.select_set(False)
         for o in previous:
