@@ -57,6 +57,10 @@ class ClipInfo:
     width: int
     height: int
     fps: float
+    # What the file itself held when probed (native VideoReader), and what
+    # the user should hear about it (a shorter file than Blender's cache).
+    frames_in_file: Optional[int] = None
+    warnings: List[str] = field(default_factory=list)
 
     @property
     def frame_end(self) -> int:
@@ -121,6 +125,16 @@ def gather_model(context, collection: Optional[bpy.types.Collection] = None,
             continue
         world, tri = arrays
         name = original.name if parent is None else f"{parent.name}/{original.name}"
+        # Blender clamps an infinite transform to 3.4e38, finite but no place.
+        usable = np.all(np.isfinite(world) & (np.abs(world) < 1e9), axis=1)
+        if not np.all(usable):
+            # Embree and the estimators cannot use such a vertex; say where it is.
+            bad = int(np.count_nonzero(~usable))
+            raise SceneError(f"Object '{name}' has {bad} vertex/vertices with a NaN, "
+                             "infinite or absurd (beyond 1e9 m) coordinate, or an object "
+                             "transform that makes one: "
+                             "fix or delete them (Mesh › Clean Up), or leave the object out "
+                             "of the model collection.")
         ids.append(np.full(len(tri), len(names), dtype=np.int32))
         names.append(name)
         verts.append(world)
@@ -137,23 +151,48 @@ def gather_model(context, collection: Optional[bpy.types.Collection] = None,
                  names=names)
 
 
-def guess_ground(model: Model) -> List[str]:
-    """Objects whose triangles face mostly up and that hold the lowest, widest
-    up-facing area: the ground the shadows fall on (overridable by the user)."""
+def guess_ground(model: Model, camera=None) -> List[str]:
+    """The ground the shadows fall on (overridable by the user): the lowest
+    large horizontal surface, below the camera when it is given (a
+    CameraInfo, or its position in the world frame), since a camera sees a surface's upper face only from
+    above.
+
+    Horizontal means the triangle's normal is within 18 deg of vertical,
+    whichever way it is wound: a thin slab's two faces count once each, so
+    height, not which face points up, must tell a floor from a ceiling (a
+    room with floor, walls and ceiling gets the floor). Candidates must have
+    at least a quarter of the largest horizontal area (a step or a kerb
+    below the ground does not win), the lowest of them by area-weighted
+    height is chosen, and other mostly-flat objects about as low and at
+    least half as large (tiles, lawns) are kept with it."""
     v = model.vertices.astype(np.float64)
     t = model.triangles
-    cross = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    if len(t) == 0 or not np.all(np.isfinite(v)):
+        return []
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    cross = np.cross(b - a, c - a)
     area = 0.5 * np.linalg.norm(cross, axis=1)
     nz = np.abs(cross[:, 2]) / np.maximum(2 * area, 1e-12)
-    up_area = np.bincount(model.object_ids, weights=area * (nz > 0.95),
-                          minlength=len(model.names))
-    total = np.bincount(model.object_ids, weights=area, minlength=len(model.names))
+    height = (a[:, 2] + b[:, 2] + c[:, 2]) / 3.0
+    flat = nz > 0.95
+    if isinstance(camera, CameraInfo):
+        camera = np.asarray(camera.params["matrix_world"], dtype=np.float64)[:3, 3]
+    if camera is not None and np.all(np.isfinite(camera)):
+        flat &= height < float(camera[2])
+    n = len(model.names)
+    up_area = np.bincount(model.object_ids, weights=area * flat, minlength=n)
+    total = np.bincount(model.object_ids, weights=area, minlength=n)
     if up_area.max() <= 0:
         return []
-    best = int(np.argmax(up_area))
-    # Also keep other mostly-flat objects at least half as large (tiles, lawns).
-    keep = [i for i in range(len(model.names))
-            if up_area[i] >= 0.5 * up_area[best] and up_area[i] >= 0.8 * total[i]]
+    level = np.bincount(model.object_ids, weights=area * flat * height, minlength=n) / \
+        np.maximum(up_area, 1e-12)
+    candidates = [i for i in range(n) if up_area[i] >= 0.25 * up_area.max()]
+    best = min(candidates, key=lambda i: (level[i], -up_area[i]))
+    # Extent of the model, for "about as low" (10 cm, or 1% of its height).
+    tolerance = max(0.1, 0.01 * float(np.ptp(v[:, 2])))
+    keep = [i for i in range(n)
+            if i == best or (up_area[i] >= 0.5 * up_area[best] and up_area[i] >= 0.8 * total[i]
+                             and abs(level[i] - level[best]) <= tolerance)]
     return [model.names[i] for i in keep]
 
 
@@ -185,7 +224,9 @@ def gather_camera(context, camera_obj=None, clip: Optional[ClipInfo] = None,
     if cam.type != "PERSP":
         raise SceneError(f"Camera '{obj.name}' is {cam.type}; only perspective "
                          "cameras are supported.")
-    warnings = []
+    # The clip's own warnings travel with the camera's: both are shown
+    # before a run (Check Scene, Estimate Sun, the scripted run).
+    warnings = list(clip.warnings) if clip is not None else []
     rw, rh = _render_size(scene)
     width, height = rw, rh
     if clip is not None:
@@ -285,10 +326,78 @@ def gather_clip(context, movieclip=None) -> ClipInfo:
     if w <= 0 or h <= 0:
         raise SceneError(f"Clip '{clip.name}' cannot be read (size {w}x{h}): "
                          "the file may be corrupt or of an unsupported format.")
-    return ClipInfo(name=clip.name, filepath=path, source=clip.source,
+    info = ClipInfo(name=clip.name, filepath=path, source=clip.source,
                     frame_start=int(clip.frame_start),
                     frame_duration=int(clip.frame_duration),
                     width=int(w), height=int(h), fps=float(clip.fps or 0.0))
+    probe_clip(info)
+    return info
+
+
+def sequence_gaps(first_path: str, limit: int = 100000) -> List[str]:
+    """Files missing inside a numbered image sequence (frame_0001.png ...):
+    names between the first file and the highest-numbered one present."""
+    import re
+    folder, name = os.path.split(first_path)
+    m = re.match(r"^(.*?)(\d+)(\.[A-Za-z0-9]+)$", name)
+    if not m:
+        return []
+    prefix, digits, suffix = m.group(1), m.group(2), m.group(3)
+    pattern = re.compile(re.escape(prefix) + r"(\d+)" + re.escape(suffix) + "$")
+    try:
+        present = {int(p.group(1)) for p in map(pattern.match, os.listdir(folder or "."))
+                   if p and len(p.group(1)) == len(digits)}
+    except OSError:
+        return []
+    first = int(digits)
+    present = {k for k in present if first <= k < first + limit}
+    if not present:
+        return []
+    return [f"{prefix}{k:0{len(digits)}d}{suffix}" for k in range(first, max(present) + 1)
+            if k not in present]
+
+
+def probe_clip(info: ClipInfo) -> None:
+    """Checks what the clip's file really holds (the native VideoReader, not
+    Blender's cached length and size, which survive the file being replaced)
+    and corrects `info` or raises SceneError:
+
+    - a file that cannot be opened, or whose frames are of another size than
+      Blender's clip (the camera was matched to that size): an error;
+    - a file with fewer frames than Blender's clip says (a 1-frame file in
+      place of a 120-frame one, or an image sequence missing a file): the
+      clip is cut to what the file holds, with a warning, so no frame gets a
+      Sun invented from frames that do not exist.
+
+    Skipped when the native core is missing (the run itself then says so)."""
+    try:
+        native = native_loader.require()
+    except RuntimeError:
+        return
+    try:
+        reader = native.VideoReader(info.filepath)
+    except (ValueError, RuntimeError) as e:
+        raise SceneError(f"Clip '{info.name}' cannot be read from {info.filepath}: {e}")
+    if (reader.width, reader.height) != (info.width, info.height):
+        raise SceneError(
+            f"Clip '{info.name}': the file's frames are {reader.width}x{reader.height} but "
+            f"Blender's clip says {info.width}x{info.height} (the file was replaced?): "
+            "reload the clip (Movie Clip Editor › Clip › Reload) and check the camera match.")
+    count = int(reader.num_frames)
+    info.frames_in_file = count if count > 0 else None
+    gaps = sequence_gaps(info.filepath) if info.source == "SEQUENCE" else []
+    if gaps:
+        shown = ", ".join(gaps[:3]) + (" ..." if len(gaps) > 3 else "")
+        info.warnings.append(
+            f"Clip '{info.name}': the image sequence misses {len(gaps)} file(s) ({shown}); "
+            f"those frames get no estimate")
+    if 0 < count < info.frame_duration:
+        info.warnings.append(
+            f"Clip '{info.name}': the file holds {count} frame(s) but Blender's clip says "
+            f"{info.frame_duration}; only frames {info.frame_start}-"
+            f"{info.frame_start + count - 1} are estimated (reload the clip if the file "
+            f"was replaced)")
+        info.frame_duration = count
 
 
 # --------------------------------------------------------------------------

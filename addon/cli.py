@@ -14,12 +14,23 @@ capture time, see core/frametimes.py; default: the panel's Frame Times),
 --fixed-latitude (place and time for physical smoothing), --initial-sun Z A.
 
 On failure: one line "sunlapse: error: <reason>" on stderr and a non-zero
-code (2 bad arguments, 3 the scene lacks something, 4 internal); the track
-file is written only when the run succeeds.
+code (2 a bad flag or file named on the command line, 3 the scene or clip
+lacks something, 4 an internal error: a bug of ours, 130 interrupted by
+Ctrl-C). Outputs are written only when the whole run succeeds, each
+atomically (a temporary file in the same folder, renamed): the track file
+last, after --apply-lamp, --render-ar and --save. An output may not be an
+input (the .blend, the clip, the times file). A failed or interrupted run
+leaves existing files as they were.
+
+Timing fields (extra "timing", initial "seconds") differ between runs; all
+else in the track file is the same for the same input and options
+(core.trackfile.without_timings gives what a byte-compare should see).
 """
 
 import argparse
+import math
 import os
+import signal
 import sys
 
 PROG = "run_estimate.py"
@@ -27,6 +38,7 @@ PROG = "run_estimate.py"
 EXIT_USAGE = 2
 EXIT_SCENE = 3
 EXIT_INTERNAL = 4
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it
 
 
 class _Parser(argparse.ArgumentParser):
@@ -80,9 +92,130 @@ def parse_frames(text, clip):
     if a > b:
         raise ValueError(f"--frames {text}: start after end")
     if a < clip.frame_start or b > clip.frame_end:
+        held = "" if clip.frames_in_file is None else \
+            f"; the file holds {clip.frames_in_file} frame(s)"
         raise ValueError(f"--frames {text} outside the clip's frames "
-                         f"{clip.frame_start}:{clip.frame_end}")
+                         f"{clip.frame_start}:{clip.frame_end}{held}")
     return a, b
+
+
+def _finite(value, flag, low=-math.inf, high=math.inf, what=None):
+    if value is None:
+        return
+    if not math.isfinite(value) or not low <= value <= high:
+        fail(EXIT_USAGE, f"{flag} {value} is not {what or f'a number in [{low:g}, {high:g}]'}")
+
+
+def parse_clock(text):
+    """Hours after midnight from HH:MM[:SS]; ValueError says what is valid."""
+    parts = text.split(":")
+    try:
+        if not 2 <= len(parts) <= 3:
+            raise ValueError
+        h, m = int(parts[0]), int(parts[1])
+        sec = float(parts[2]) if len(parts) == 3 else 0.0
+        if not (0 <= h <= 23 and 0 <= m <= 59 and 0 <= sec < 60):
+            raise ValueError
+    except ValueError:
+        raise ValueError(f"--start-time '{text}' is not a time HH:MM[:SS] "
+                         f"(00:00 to 23:59:59)")
+    return h + m / 60 + sec / 3600
+
+
+def check_flags(args):
+    """Values the flags must have, checked before anything is read or run."""
+    _finite(args.latitude, "--latitude", -90, 90, "a latitude in [-90, 90] degrees")
+    _finite(args.longitude, "--longitude", -180, 360, "a longitude in [-180, 360] degrees")
+    _finite(args.utc_offset, "--utc-offset", -14, 14, "a UTC offset in [-14, 14] hours")
+    if args.frame_seconds is not None and not (math.isfinite(args.frame_seconds)
+                                               and args.frame_seconds > 0):
+        fail(EXIT_USAGE, f"--frame-seconds {args.frame_seconds} is not a positive number of "
+                         f"seconds (0 would put every frame at one instant)")
+    if args.initial_sun:
+        z, a = args.initial_sun
+        if not (math.isfinite(z) and 0 <= z < 90):
+            fail(EXIT_USAGE, f"--initial-sun zenith {z} is not in [0, 90)")
+        if not math.isfinite(a):
+            fail(EXIT_USAGE, f"--initial-sun azimuth {a} is not a finite number of degrees")
+    if args.date:
+        import datetime as dt
+        try:
+            dt.date.fromisoformat(args.date)
+        except ValueError:
+            fail(EXIT_USAGE, f"--date '{args.date}' is not a date YYYY-MM-DD")
+    if args.start_time:
+        try:
+            parse_clock(args.start_time)
+        except ValueError as e:
+            fail(EXIT_USAGE, str(e))
+    if args.times is not None:  # a times file's faults are input faults, as its lines'
+        if not os.path.exists(args.times):
+            fail(EXIT_SCENE, f"--times {args.times}: no such file")
+        if os.path.isdir(args.times):
+            fail(EXIT_SCENE, f"--times {args.times} is a folder; give the times CSV file")
+    outputs = [("--out", args.out), ("--save", args.save)]
+    for flag, path in outputs:
+        if path is not None:
+            check_output(flag, path)
+    if args.render_ar is not None:
+        folder = os.path.abspath(args.render_ar)
+        if os.path.exists(folder) and not os.path.isdir(folder):
+            fail(EXIT_USAGE, f"--render-ar {args.render_ar} is a file; give a folder")
+        parent = folder if os.path.isdir(folder) else os.path.dirname(folder)
+        if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK):
+            fail(EXIT_USAGE, f"--render-ar {args.render_ar}: cannot write in {parent}")
+    if args.save is not None and _same(args.out, args.save):
+        fail(EXIT_USAGE, f"--out and --save are the same file {args.out}")
+
+
+def check_output(flag, path):
+    """An output path must name a file in an existing folder we can write."""
+    if not path or path.endswith(os.sep):
+        fail(EXIT_USAGE, f"{flag} '{path}' is not a file name")
+    full = os.path.abspath(path)
+    if os.path.isdir(full):
+        fail(EXIT_USAGE, f"{flag} {path} is a folder; give a file name in it")
+    folder = os.path.dirname(full)
+    if not os.path.isdir(folder):
+        fail(EXIT_USAGE, f"{flag} {path}: the folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        fail(EXIT_USAGE, f"{flag} {path}: the folder {folder} is not writable")
+    if os.path.exists(full) and not os.access(full, os.W_OK):
+        fail(EXIT_USAGE, f"{flag} {path} is read-only")
+
+
+def _same(a, b):
+    """Whether two paths name one file (links followed; files may not exist)."""
+    if not a or not b:
+        return False
+    try:
+        if os.path.exists(a) and os.path.exists(b):
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return os.path.normcase(os.path.realpath(a)) == os.path.normcase(os.path.realpath(b))
+
+
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr", ".bmp", ".webp")
+
+
+def check_not_inputs(args, blend_path, clip, times_path):
+    """Refuses an output that would replace an input (the issue's --out
+    naming the clip or the .blend, which were overwritten with JSON)."""
+    inputs = [(blend_path, "the .blend being run"), (clip.filepath, "the clip"),
+              (times_path, "the times file")]
+    for flag, path in (("--out", args.out), ("--save", args.save)):
+        if path is None:
+            continue
+        for source, what in inputs:
+            if source and _same(path, source):
+                fail(EXIT_USAGE, f"{flag} {path} is {what}, an input: give another file name")
+        # Another image of the clip's sequence is an input too.
+        if clip.source == "SEQUENCE" and \
+                _same(os.path.dirname(os.path.abspath(path)), os.path.dirname(clip.filepath)) and \
+                os.path.splitext(path)[1].lower() in IMAGE_EXTENSIONS:
+            fail(EXIT_USAGE, f"{flag} {path} is an image beside the clip's sequence: "
+                             f"give another file name")
 
 
 def physical_inputs(args, context, options):
@@ -106,6 +239,8 @@ def physical_inputs(args, context, options):
         missing = [n for n, v in (("--latitude", lat), ("--longitude", lon)) if v is None]
         if missing:
             fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing))
+        _finite(lat, "latitude", -90, 90, "a latitude in [-90, 90] degrees")
+        _finite(lon, "longitude", -180, 360, "a longitude in [-180, 360] degrees")
         return {"latitude_deg": lat, "longitude_deg": lon}
     utc = args.utc_offset if args.utc_offset is not None else getattr(sp, "UTC_zone", 0.0)
     first = options.first_time if not (args.date or args.start_time) else None
@@ -118,14 +253,12 @@ def physical_inputs(args, context, options):
             else:
                 day = None
             if args.start_time:
-                parts = [float(v) for v in args.start_time.split(":")]
-                hours = parts[0] + (parts[1] if len(parts) > 1 else 0) / 60 + \
-                    (parts[2] if len(parts) > 2 else 0) / 3600
+                hours = parse_clock(args.start_time)
             else:
                 hours = getattr(sp, "time", None)
             if day is not None and hours is not None:
                 first = frametimes.local_start(day, hours, utc)
-    except ValueError as e:
+    except (ValueError, OverflowError) as e:
         fail(EXIT_USAGE, f"bad --date or --start-time: {e}")
     seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds
     missing = [name for name, v in (("--latitude", lat), ("--longitude", lon),
@@ -134,6 +267,10 @@ def physical_inputs(args, context, options):
     if missing:
         fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing) +
              " (or --times, or Blender's Sun Position add-on values)")
+    _finite(lat, "latitude", -90, 90, "a latitude in [-90, 90] degrees")
+    _finite(lon, "longitude", -180, 360, "a longitude in [-180, 360] degrees")
+    if not (math.isfinite(seconds) and seconds > 0):
+        fail(EXIT_USAGE, f"--frame-seconds {seconds} is not a positive number of seconds")
     return {"first_time": first, "frame_seconds": seconds,
             "latitude_deg": lat, "longitude_deg": lon}
 
@@ -148,12 +285,75 @@ def fail(code, message):
     raise CliError(code, message)
 
 
-def _run(argv):
+class _Interrupt:
+    """Ctrl-C in a scripted run: Blender's own handler only flags the first
+    one (its render loop looks; our loop never did) and kills on the second.
+    Ours raises KeyboardInterrupt in the Python code running (the shadow
+    search, the tracking loop) and flags it, for native work: the run's
+    progress callback then cancels it, and every later step checks before it
+    writes anything. Outputs are written last and atomically, so an
+    interrupt at any point leaves existing files as they were."""
+
+    def __init__(self):
+        self.hit = False
+        self.previous = None
+
+    def __enter__(self):
+        try:
+            self.previous = signal.signal(signal.SIGINT, self._handle)
+        except ValueError:  # not the main thread: nothing to catch
+            self.previous = None
+        return self
+
+    def _handle(self, signum, frame):
+        if self.hit:  # a second Ctrl-C: the user insists
+            os._exit(EXIT_INTERRUPTED)
+        self.hit = True
+        raise KeyboardInterrupt
+
+    def __exit__(self, *exc):
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+        return False
+
+    def check(self):
+        if self.hit:
+            fail(EXIT_INTERRUPTED, "interrupted (Ctrl-C): nothing written, "
+                                   "existing files left as they were")
+
+    def progress(self, fraction):
+        return not self.hit  # False cancels the run
+
+
+def save_blend_atomically(path):
+    """Saves a copy of the open .blend to `path` through a temporary file in
+    the same folder (an interrupted or failed save leaves `path` as it was)."""
+    import uuid
+    import bpy
+    full = os.path.abspath(path)
+    # A name not yet taken (an existing file would get a .blend1 backup).
+    tmp = os.path.join(os.path.dirname(full), f".sunlapse-{uuid.uuid4().hex}.blend")
+    try:
+        result = bpy.ops.wm.save_as_mainfile(filepath=tmp, copy=True)
+        if result != {"FINISHED"} or not os.path.getsize(tmp):
+            raise RuntimeError(f"Blender did not save ({result})")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, full)
+    finally:
+        for leftover in (tmp, tmp + "@", tmp + "1"):
+            if os.path.exists(leftover):
+                os.unlink(leftover)
+
+
+def _run(argv, interrupt):
     import bpy
     from . import ar, bridge, native_loader, operators, pipeline, register, results
     from .core import trackfile
 
     args = parse_args(argv)
+    check_flags(args)
     try:
         native_loader.require()
     except RuntimeError as e:
@@ -166,40 +366,51 @@ def _run(argv):
             fail(EXIT_USAGE, f"no collection named '{args.collection}'")
     try:
         clip = bridge.gather_clip(context)
-        frames = parse_frames(args.frames, clip)
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))
+    if not hasattr(bpy.types.Scene, "sunlapse"):
+        register()  # properties and operators, as in the UI; the panel's times file
+    times_path = os.path.abspath(args.times) if args.times else None
+    settings_times = getattr(getattr(context.scene, "sunlapse", None), "times_file", "")
+    check_not_inputs(args, bpy.data.filepath, clip,
+                     times_path or (settings_times and bpy.path.abspath(settings_times)))
+    try:
+        frames = parse_frames(args.frames, clip)
     except ValueError as e:
         fail(EXIT_USAGE, str(e))
 
-    if not hasattr(bpy.types.Scene, "sunlapse"):
-        register()  # properties and operators, as in the UI
     try:
         scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
             context, collection=collection, ground=args.ground, frames=frames,
             method=args.method, smoothing=args.smoothing,
-            times_file=os.path.abspath(args.times) if args.times else None,
-            utc_offset=args.utc_offset)
+            times_file=times_path, utc_offset=args.utc_offset)
         if args.smoothing == "physical":
             if args.fixed_latitude:
                 options.fit_latitude = False
             for key, value in physical_inputs(args, context, options).items():
                 setattr(options, key, value)
         if args.initial_sun:
-            z, a = args.initial_sun
-            if not (0 <= z < 90):
-                fail(EXIT_USAGE, f"--initial-sun zenith {z} is not in [0, 90)")
-            options.initial_sun = (z, a)
-        track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers, options)
+            options.initial_sun = tuple(args.initial_sun)
+        if options.frame_times and len(numbers) > 1 and \
+                len({options.frame_times[f] for f in numbers}) < 2:
+            print(f"sunlapse: warning: the times file gives every frame of {frames[0]}-"
+                  f"{frames[1]} the same time: frames are smoothed in frame order")
+        interrupt.check()
+        # Flushed: a wrapper (or a test) waiting for the work to start sees it.
+        print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "
+              f"(Ctrl-C stops)", flush=True)
+        track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers,
+                             options, progress=interrupt.progress)
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))
     except pipeline.PipelineError as e:
+        interrupt.check()  # "cancelled" by Ctrl-C
         fail(EXIT_SCENE, str(e))
+    interrupt.check()
     summary = operators.finish_run(context, track, clip, dict(extra, method=args.method,
                                                                frames=list(frames)))
     if operators.report_level(track) == {"WARNING"}:
         print(f"sunlapse: warning: {summary}")
-    trackfile.write_track(args.out, track)
     init = track.initial
     if init:
         print(f"sunlapse: initial Sun zenith {init['zenith_deg']:.2f} azimuth "
@@ -212,15 +423,22 @@ def _run(argv):
     done = sum(1 for f in track.frames if f.has_estimate)
     timing = track.extra.get("timing", {})
     print(f"sunlapse: {done}/{len(track.frames)} frames estimated "
-          f"(tracking {timing.get('tracking_ms_per_frame', 0):.1f} ms/frame); wrote {args.out}")
+          f"(tracking {timing.get('tracking_ms_per_frame', 0):.1f} ms/frame)")
     if args.apply_lamp or args.render_ar:
+        interrupt.check()
         try:
             sun = results.apply_track(context, track, context.scene.sunlapse.sun_lamp)
         except ValueError as e:
             fail(EXIT_SCENE, str(e))
         context.scene.sunlapse.sun_lamp = sun
-        print(f"sunlapse: keyed Sun lamp '{sun.name}' on {done} frames")
+        keyed = len(sun.get(results.KEYED_FRAMES_PROP, []))
+        print(f"sunlapse: keyed Sun lamp '{sun.name}' on {keyed} frames")
+        skipped = results.extrapolated_frames(track)
+        if skipped:
+            print(f"sunlapse: warning: {len(skipped)} frame(s) beyond the measured ones "
+                  f"({skipped[0]}...{skipped[-1]}) only extrapolate the smoothing: not keyed")
     if args.render_ar:
+        interrupt.check()
         try:
             print(f"sunlapse: {ar.setup(context)}")
         except (bridge.SceneError, ValueError) as e:
@@ -229,23 +447,39 @@ def _run(argv):
         ar.render_frames(context, os.path.abspath(args.render_ar), frames)
         print(f"sunlapse: rendered AR frames {frames[0]}-{frames[1]} to {args.render_ar}")
     if args.save:
-        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save), copy=True)
+        interrupt.check()
+        try:
+            save_blend_atomically(args.save)
+        except (OSError, RuntimeError) as e:
+            fail(EXIT_USAGE, f"--save {args.save}: cannot save the .blend there ({e})")
         print(f"sunlapse: saved {args.save}")
+    # The track file last: it exists only when everything above succeeded.
+    interrupt.check()
+    try:
+        trackfile.write_track(args.out, track)
+    except OSError as e:
+        fail(EXIT_USAGE, f"--out {args.out}: cannot write the track file there "
+                         f"({e.strerror or e})")
+    print(f"sunlapse: wrote {args.out}")
 
 
 def main(argv):
     """Runs with arguments `argv`; returns the exit code (0 on success)."""
-    try:
-        _run(argv)
-        return 0
-    except CliError as e:
-        message, code = str(e), e.code
-    except SystemExit as e:  # argparse: usage already printed
-        return int(e.code or 0) and EXIT_USAGE
-    except Exception as e:  # an internal bug: still one line, non-zero exit
-        import traceback
-        traceback.print_exc()
-        message, code = f"internal error: {type(e).__name__}: {e}", EXIT_INTERNAL
+    with _Interrupt() as interrupt:
+        try:
+            _run(argv, interrupt)
+            return 0
+        except CliError as e:
+            message, code = str(e), e.code
+        except SystemExit as e:  # argparse: usage already printed
+            return int(e.code or 0) and EXIT_USAGE
+        except KeyboardInterrupt:
+            message, code = ("interrupted (Ctrl-C): nothing written, existing files left as "
+                             "they were"), EXIT_INTERRUPTED
+        except Exception as e:  # an internal bug: still one line, non-zero exit
+            import traceback
+            traceback.print_exc()
+            message, code = f"internal error: {type(e).__name__}: {e}", EXIT_INTERNAL
     sys.stderr.write(f"sunlapse: error: {message}\n")
     sys.stderr.flush()
     return code

@@ -48,7 +48,7 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             return {"CANCELLED"}
         for w in cam.warnings:
             self.report({"WARNING"}, w)
-        ground = ground_names(settings) or bridge.guess_ground(model)
+        ground = ground_names(settings) or bridge.guess_ground(model, cam)
         msg = (f"{model.num_triangles} triangles in {len(model.names)} objects "
                f"(gathered in {t1 - t0:.2f} s, BVH {t2 - t1:.2f} s); camera "
                f"'{cam.name}'; clip '{clip.name}' {clip.width}x{clip.height}, "
@@ -127,7 +127,7 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
     settings = settings or context.scene.sunlapse
     native_loader.require()
     model, cam, clip = gather_all(context, settings, collection=collection)
-    names = ground or ground_names(settings) or bridge.guess_ground(model)
+    names = ground or ground_names(settings) or bridge.guess_ground(model, cam)
     missing = [g for g in names if g not in model.names]
     if missing:
         raise bridge.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")

@@ -34,13 +34,41 @@ def load_track():
     if text is None:
         return None
     try:
-        return trackfile.from_json(json.loads(text.as_string()), source=TEXT_NAME)
-    except (ValueError, trackfile.TrackFileError):
+        # Validated once here (trackfile.loads): the panel, overlay, Apply and
+        # Export may trust what they get. A track edited into nonsense in the
+        # Text Editor reads as no track.
+        return trackfile.loads(text.as_string(), source=TEXT_NAME)
+    except trackfile.TrackFileError as e:
+        print(f"sunlapse: warning: the stored track is unusable: {e}")
         return None
 
 
 def estimated_frames(track):
     return [f for f in track.frames if f.has_estimate]
+
+
+def measured_span(track):
+    """(first, last) frame with a measured (raw) Sun, or None."""
+    measured = [f.frame for f in track.frames
+                if f.raw_zenith_deg is not None and f.raw_azimuth_deg is not None]
+    return (min(measured), max(measured)) if measured else None
+
+
+def extrapolated_frames(track):
+    """Frames whose Sun only extrapolates the smoothing beyond the measured
+    frames (a clip that ended early, frames lost at its start or end): no
+    measurement backs them, so they are not keyed."""
+    span = measured_span(track)
+    if span is None:  # no raw angles at all (a truth file): nothing tells
+        return []
+    return [f.frame for f in track.frames
+            if f.has_estimate and not span[0] <= f.frame <= span[1]]
+
+
+def keyable_frames(track):
+    """Estimated frames within the measured span (interpolated gaps included)."""
+    skip = set(extrapolated_frames(track))
+    return [f for f in estimated_frames(track) if f.frame not in skip]
 
 
 def _remove_own_keys(obj, paths, frames):
@@ -107,11 +135,13 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
     """Keys the Sun lamp (created if needed) on every estimated frame; returns it.
 
     Running it again replaces its own keys only. With keyframe_strength the
-    lamp's strength follows the measured sun/ambient ratio.
+    lamp's strength follows the measured sun/ambient ratio. Frames that only
+    extrapolate beyond the measured ones are not keyed (extrapolated_frames).
     """
-    frames = estimated_frames(track)
+    frames = keyable_frames(track)
     if not frames:
-        raise ValueError("the track has no estimated frame to apply")
+        raise ValueError("the track has no measured frame to apply (run Estimate Sun on "
+                         "frames that show the scene)")
     sun = lamp.ensure_sun_lamp(context, sun_obj)
     paths = {"rotation_euler", "rotation_quaternion", "rotation_axis_angle"}
     _remove_own_keys(sun, paths, sun.get(KEYED_FRAMES_PROP, []))
@@ -139,17 +169,28 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
 
 
 def export_csv(track, path):
-    """frame, zenith_deg, azimuth_deg, confidence (one row per frame)."""
-    tmp = path + ".tmp"
-    with open(tmp, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(["frame", "zenith_deg", "azimuth_deg", "confidence"])
-        for f in track.frames:
-            w.writerow([f.frame,
-                        "" if f.zenith_deg is None else f"{f.zenith_deg:.6f}",
-                        "" if f.azimuth_deg is None else f"{f.azimuth_deg:.6f}",
-                        f"{f.confidence:.4f}"])
-    os.replace(tmp, path)
+    """frame, zenith_deg, azimuth_deg, confidence (one row per frame),
+    written atomically (a temporary file in the same folder, renamed)."""
+    import tempfile
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".csv", dir=folder)
+    try:
+        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(["frame", "zenith_deg", "azimuth_deg", "confidence"])
+            for f in track.frames:
+                w.writerow([f.frame,
+                            "" if f.zenith_deg is None else f"{f.zenith_deg:.6f}",
+                            "" if f.azimuth_deg is None else f"{f.azimuth_deg:.6f}",
+                            f"{f.confidence:.4f}"])
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 def export_gltf(context, sun_obj, path):
@@ -167,14 +208,25 @@ def export_gltf(context, sun_obj, path):
             o.select_set(False)
         sun_obj.select_set(True)
         view_layer.objects.active = sun_obj
-        kwargs = dict(filepath=path, export_format="GLB", use_selection=True,
+        # Through a temporary file in the same folder, renamed: a failed
+        # export leaves an existing file as it was.
+        import uuid
+        tmp = os.path.join(os.path.dirname(os.path.abspath(path)),
+                           f".sunlapse-{uuid.uuid4().hex}.glb")
+        kwargs = dict(filepath=tmp, export_format="GLB", use_selection=True,
                       export_animations=True, export_force_sampling=True)
         # The option that turns lights on was renamed across Blender versions.
         props = bpy.ops.export_scene.gltf.get_rna_type().properties
         for name in ("export_lights", "export_punctual_lights"):
             if name in props:
                 kwargs[name] = True
-        result = bpy.ops.export_scene.gltf(**kwargs)
+        try:
+            result = bpy.ops.export_scene.gltf(**kwargs)
+            if result == {"FINISHED"} and os.path.exists(tmp):
+                os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
     finally:
         sun_obj.select_set(False)
         for o in previous:

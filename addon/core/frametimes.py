@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import datetime as dt
+import io
 from typing import Dict, List, Optional, Sequence
 
 TIME_COLUMNS = ("local_time", "time", "utc_time")
@@ -39,7 +40,7 @@ def parse_time(text: str, tz: dt.tzinfo) -> dt.datetime:
     text = text.strip()
     try:
         t = dt.datetime.fromisoformat(text.replace(" ", "T", 1) if "T" not in text else text)
-    except ValueError:
+    except (ValueError, OverflowError):
         raise ValueError(f"'{text}' is not a date and time (YYYY-MM-DD HH:MM[:SS])")
     return t if t.tzinfo is not None else t.replace(tzinfo=tz)
 
@@ -51,38 +52,84 @@ def local_start(day: dt.date, hours: float, utc_offset_hours: float) -> dt.datet
     return dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
 
 
-def read_times(path: str, utc_offset_hours: float = 0.0) -> Dict[int, dt.datetime]:
-    """{clip frame number: aware UTC datetime} from a times CSV."""
+def _decode(data: bytes, path: str) -> str:
+    """Text of a times file: UTF-8 (with or without the byte-order mark
+    Excel writes), else Windows-1252 (Excel's "CSV" on Windows in the West)."""
+    if b"\x00" in data:
+        raise FrameTimesError(f"times file {path}: not a text file (it holds NUL bytes); "
+                              f"save it as CSV text")
     try:
-        fh = open(path, newline="", encoding="utf-8")
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        pass
+    try:
+        return data.decode("cp1252")
+    except UnicodeDecodeError as e:
+        raise FrameTimesError(f"times file {path}: neither UTF-8 nor Windows-1252 text "
+                              f"(byte {e.start}); save it as UTF-8 CSV")
+
+
+# Larger is not a times file (a million frames of ~30 bytes each).
+MAX_BYTES = 64 * 1024 * 1024
+
+
+def read_times(path: str, utc_offset_hours: float = 0.0) -> Dict[int, dt.datetime]:
+    """{clip frame number: aware UTC datetime} from a times CSV. Raises
+    FrameTimesError (only) naming the file, the line and what is valid."""
+    try:
+        if not -14.0 <= float(utc_offset_hours) <= 14.0:
+            raise ValueError
+        tz_local = dt.timezone(dt.timedelta(hours=float(utc_offset_hours)))
+    except (TypeError, ValueError, OverflowError):
+        raise FrameTimesError(f"UTC offset {utc_offset_hours} is not a number of hours "
+                              f"in [-14, 14]")
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_BYTES + 1)
     except FileNotFoundError:
         raise FrameTimesError(f"times file {path}: no such file")
+    except IsADirectoryError:
+        raise FrameTimesError(f"times file {path}: is a folder, not a CSV file")
     except OSError as e:
-        raise FrameTimesError(f"times file {path}: cannot be read ({e.strerror})")
-    with fh:
-        reader = csv.DictReader(fh)
-        fields = [f.strip() for f in (reader.fieldnames or [])]
-        reader.fieldnames = fields
-        column = next((c for c in TIME_COLUMNS if c in fields), None)
-        if "frame" not in fields or column is None:
-            raise FrameTimesError(f"times file {path}: needs a header with 'frame' and one of "
-                                  f"{', '.join(TIME_COLUMNS)} (found: {', '.join(fields) or 'none'})")
-        tz = dt.timezone.utc if column == "utc_time" else \
-            dt.timezone(dt.timedelta(hours=utc_offset_hours))
-        table: Dict[int, dt.datetime] = {}
-        for row in reader:
-            line = reader.line_num
-            if not any((v or "").strip() for v in row.values() if isinstance(v, str)):
-                continue  # blank line
-            try:
-                frame = int(str(row["frame"]).strip())
-                when = parse_time(str(row[column] or ""), tz)
-            except (ValueError, TypeError) as e:
-                raise FrameTimesError(f"times file {path}, line {line}: {e}")
-            if frame in table:
-                raise FrameTimesError(f"times file {path}, line {line}: frame {frame} "
-                                      f"is listed twice")
-            table[frame] = when.astimezone(dt.timezone.utc)
+        raise FrameTimesError(f"times file {path}: cannot be read ({e.strerror or e})")
+    if len(data) > MAX_BYTES:
+        raise FrameTimesError(f"times file {path}: larger than {MAX_BYTES >> 20} MB, "
+                              f"not a times file")
+    text = _decode(data, path)
+    try:
+        return _parse(io.StringIO(text, newline=""), path, tz_local)
+    except csv.Error as e:
+        raise FrameTimesError(f"times file {path}: not readable as CSV ({e})")
+
+
+def _parse(fh, path: str, tz_local: dt.tzinfo) -> Dict[int, dt.datetime]:
+    reader = csv.DictReader(fh)
+    fields = [str(f).strip() for f in (reader.fieldnames or [])]
+    reader.fieldnames = fields
+    column = next((c for c in TIME_COLUMNS if c in fields), None)
+    if "frame" not in fields or column is None:
+        shown = ", ".join(f[:40] for f in fields[:8]) or "none"
+        raise FrameTimesError(f"times file {path}: needs a header with 'frame' and one of "
+                              f"{', '.join(TIME_COLUMNS)} (found: {shown})")
+    tz = dt.timezone.utc if column == "utc_time" else tz_local
+    table: Dict[int, dt.datetime] = {}
+    for row in reader:
+        line = reader.line_num
+        if not any((v or "").strip() for v in row.values() if isinstance(v, str)):
+            continue  # blank line
+        try:
+            frame_text = str(row["frame"] or "").strip()
+            if not frame_text.lstrip("+-").isdigit() or len(frame_text) > 9:
+                raise ValueError(f"frame '{frame_text[:20]}' is not a whole number")
+            frame = int(frame_text)
+            when = parse_time(str(row[column] or "")[:64], tz)
+            utc = when.astimezone(dt.timezone.utc)
+        except (ValueError, TypeError, OverflowError) as e:
+            raise FrameTimesError(f"times file {path}, line {line}: {e}")
+        if frame in table:
+            raise FrameTimesError(f"times file {path}, line {line}: frame {frame} "
+                                  f"is listed twice")
+        table[frame] = utc
     if not table:
         raise FrameTimesError(f"times file {path}: no frames listed")
     return table

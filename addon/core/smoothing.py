@@ -18,8 +18,24 @@ def _arrays(frames, values, weights):
     t = np.asarray(frames, dtype=float)
     v = np.array([np.nan if x is None else float(x) for x in values], dtype=float)
     w = np.asarray(weights, dtype=float) if weights is not None else np.ones_like(v)
-    w = np.where(np.isfinite(v) & (w > 0), w, 0.0)
+    if not (len(t) == len(v) == len(w)):
+        raise ValueError(f"{len(t)} times, {len(v)} values and {len(w)} weights")
+    # A NaN time or weight would reach LAPACK inside polyfit, whose error
+    # handler ends the process (Blender included): such samples carry no weight.
+    # Angles beyond 1e9 deg are garbage whose squares overflow in the fit.
+    ok = np.isfinite(v) & (np.abs(np.nan_to_num(v)) < 1e9) & np.isfinite(t) & np.isfinite(w)
+    w = np.where(ok & (w > 0), w, 0.0)
     return t, v, w
+
+
+def _safe_degree(x_good, degree):
+    """The polynomial degree the samples can carry: one less than the number
+    of distinct times (`x_good` normalised, spread at most about 1). Samples
+    all at one time (a date-only times column) make a Vandermonde matrix of
+    zero columns, which polyfit scales by 0/0 and LAPACK then aborts on; a
+    constant is all such data can give."""
+    distinct = len(np.unique(np.round(x_good, 6)))
+    return int(max(0, min(degree, distinct - 1)))
 
 
 def unwrap_deg(values: Sequence[Optional[float]]) -> np.ndarray:
@@ -50,8 +66,14 @@ def online(frames, values, weights=None, alpha=0.3, window=15):
         if s is None:
             out.append(None)
             continue
-        if len(hist_t) >= 3 and np.ptp(hist_t) > 0:
-            slope, icpt = np.polyfit(hist_t, hist_s, 1)
+        if len(hist_t) >= 3 and np.ptp(hist_t) > 1e-6 and np.isfinite(t[k]) and \
+                np.all(np.isfinite(hist_s)):
+            # The line in closed form: polyfit's LAPACK call aborts the
+            # process on times only 1e-160 apart.
+            ht, hs = np.asarray(hist_t), np.asarray(hist_s)
+            d = ht - ht.mean()
+            slope = float(d @ (hs - hs.mean()) / (d @ d))
+            icpt = float(hs.mean() - slope * ht.mean())
             # Exponential smoothing lags by (1-alpha)/alpha samples on a ramp.
             lag = (1 - alpha) / alpha
             step = (hist_t[-1] - hist_t[0]) / max(1, len(hist_t) - 1)
@@ -69,9 +91,9 @@ def two_pass(frames, values, weights=None, degree=1, iterations=6):
     good = w > 0
     if good.sum() == 0:
         return [None] * len(t)
-    degree = int(min(degree, max(0, good.sum() - 1)))
     t0, span = t[good].mean(), max(1.0, np.ptp(t[good]))
-    x = (t - t0) / span
+    x = np.where(np.isfinite(t), (t - t0) / span, 0.0)
+    degree = _safe_degree(x[good], degree)
     robust = np.ones_like(w)
     coef = None
     for _ in range(iterations):
@@ -109,9 +131,9 @@ def two_pass_directions(frames, zenith, azimuth, weights=None, degree=3, iterati
     good = w > 0
     if good.sum() == 0:
         return [None] * len(t), [None] * len(t)
-    degree = int(min(degree, max(0, good.sum() - 1)))
     t0, span = t[good].mean(), max(1.0, np.ptp(t[good]))
-    x = (t - t0) / span
+    x = np.where(np.isfinite(t), (t - t0) / span, 0.0)
+    degree = _safe_degree(x[good], degree)
     raw = np.zeros((len(t), 3))
     raw[good] = _unit_vectors(z[good], a[good])
     robust = np.ones_like(w)
@@ -175,6 +197,11 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
     n = len(frames)
     if times_s is not None and len(times_s) != n:
         raise ValueError(f"{len(times_s)} times for {n} frames")
+    if times_s is not None and (n < 2 or not np.all(np.isfinite(times_s))
+                                or np.ptp(np.asarray(times_s, float)) == 0):
+        # Every frame at one time (a date-only times column): time cannot
+        # order or space them, the frame numbers still can.
+        times_s = None
     order = list(range(n)) if times_s is None else \
         sorted(range(n), key=lambda i: (times_s[i], frames[i]))
     x = [frames[i] if times_s is None else times_s[i] for i in order]

@@ -41,6 +41,9 @@ class PathFit:
 
 def frame_times(first: dt.datetime, frame_seconds: float, frames: Sequence[int]):
     """UTC time of each frame, the first of `frames` at `first` (aware)."""
+    if frame_seconds is None or not math.isfinite(frame_seconds) or frame_seconds <= 0:
+        # 0 s puts every frame at one instant: a fixed Sun, confidently wrong.
+        raise ValueError(f"seconds between frames must be a positive number, got {frame_seconds}")
     f0 = frames[0]
     return [(first + dt.timedelta(seconds=(f - f0) * frame_seconds)).astimezone(dt.timezone.utc)
             for f in frames]
@@ -55,12 +58,36 @@ def fit_sun_path(times: Sequence[dt.datetime], zenith: Sequence[Optional[float]]
                  sun_position: SunModel, latitude_deg: float, longitude_deg: float,
                  latitude_sigma_deg: float = 3.0, time_sigma_s: float = 900.0,
                  fit_latitude: bool = True) -> PathFit:
+    # Degenerate inputs end as a failed fit with a reason (the caller falls
+    # back), never as NaNs reaching the solver.
+    if not (isinstance(latitude_deg, (int, float)) and math.isfinite(latitude_deg)
+            and -90.0 <= latitude_deg <= 90.0):
+        return PathFit(False, f"latitude {latitude_deg} is not in [-90, 90]")
+    if not (isinstance(longitude_deg, (int, float)) and math.isfinite(longitude_deg)
+            and -180.0 <= longitude_deg <= 360.0):
+        return PathFit(False, f"longitude {longitude_deg} is not in [-180, 360]")
+    if not (len(times) == len(zenith) == len(azimuth_world) == len(weights)):
+        return PathFit(False, "times, angles and weights differ in number")
     z_obs = np.array([np.nan if v is None else v for v in zenith], float)
     a_obs = np.array([np.nan if v is None else v for v in azimuth_world], float)
-    w = np.where(np.isfinite(z_obs) & np.isfinite(a_obs), np.asarray(weights, float), 0.0)
+    w_in = np.array([np.nan if v is None else v for v in weights], float)
+    w = np.where(np.isfinite(z_obs) & np.isfinite(a_obs) & np.isfinite(w_in) & (w_in > 0),
+                 w_in, 0.0)
     use = np.flatnonzero(w > 0)
     if len(use) < 3:
         return PathFit(False, "fewer than 3 frames with an estimate: nothing to fit")
+    if len({times[i] for i in use}) < 2:
+        return PathFit(False, "every frame has the same time: the Sun's path cannot be "
+                              "fitted (check the seconds per frame or the times file)")
+    try:
+        return _fit(times, z_obs, a_obs, w, use, sun_position, latitude_deg, longitude_deg,
+                    latitude_sigma_deg, time_sigma_s, fit_latitude)
+    except (np.linalg.LinAlgError, OverflowError, ValueError) as e:
+        return PathFit(False, f"the fit did not converge ({e})")
+
+
+def _fit(times, z_obs, a_obs, w, use, sun_position, latitude_deg, longitude_deg,
+         latitude_sigma_deg, time_sigma_s, fit_latitude) -> PathFit:
 
     def model(lat, dt_s, idx):
         out = np.empty((len(idx), 2))
@@ -100,6 +127,8 @@ def fit_sun_path(times: Sequence[dt.datetime], zenith: Sequence[Optional[float]]
             cost = float(r @ r)
             if best is None or cost < best[0]:
                 best = (cost, np.array([lat, dt_s, north]))
+    if best is None or not np.isfinite(best[0]):
+        return PathFit(False, "no Sun path near the given place and time fits the angles")
     p = best[1]
     # Levenberg-Marquardt on all frames, Huber-reweighted.
     robust = np.ones(len(use))
@@ -119,6 +148,8 @@ def fit_sun_path(times: Sequence[dt.datetime], zenith: Sequence[Optional[float]]
             A = J.T @ J
             g = J.T @ r0
             improved = False
+            if not (np.all(np.isfinite(A)) and np.all(np.isfinite(g))):
+                break
             for _ in range(8):
                 delta = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-9), g)
                 cand = p + delta
@@ -135,6 +166,8 @@ def fit_sun_path(times: Sequence[dt.datetime], zenith: Sequence[Optional[float]]
     lat, dt_s, north = p
     _, rz, ra = residuals(p, use, np.ones(len(use)))
     e = np.hypot(rz, ra)
+    if not np.all(np.isfinite(p)):
+        return PathFit(False, "the fit diverged")
     full = model(lat, dt_s, range(len(times)))
     fit = PathFit(True, "", float(lat), float(longitude_deg), float(dt_s), float(north) % 360.0,
                   float(np.sqrt(np.median(e ** 2))), [float(v) for v in full[:, 0]],

@@ -118,16 +118,36 @@ def to_json(track: Track) -> Dict[str, Any]:
     return _clean(d)
 
 
+# Fields that measure how long the run took: the only ones two runs of the
+# same input and options may differ in.
+TIMING_KEYS = ("timing",)            # top level
+INITIAL_TIMING_KEYS = ("seconds",)   # in "initial"
+
+
+def without_timings(d: Dict[str, Any]) -> Dict[str, Any]:
+    """A track file's JSON without its timing fields: what a byte-compare of
+    two runs should see (to_text(without_timings(json.load(...))))."""
+    out = {k: v for k, v in d.items() if k not in TIMING_KEYS}
+    if isinstance(out.get("initial"), dict):
+        out["initial"] = {k: v for k, v in out["initial"].items()
+                          if k not in INITIAL_TIMING_KEYS}
+    return out
+
+
+def to_text(d: Dict[str, Any]) -> str:
+    """The exact text write_track writes for the JSON `d`."""
+    return json.dumps(d, indent=1, allow_nan=False) + "\n"
+
+
 def write_track(path: str, track: Track) -> None:
     """Writes atomically: a crash mid-write never leaves a half file behind."""
-    text = json.dumps(to_json(track), indent=1, allow_nan=False)
+    text = to_text(to_json(track))
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".json", dir=folder)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
-            fh.write("\n")
         # mkstemp makes the file private; give it the usual mode.
         umask = os.umask(0)
         os.umask(umask)
@@ -143,55 +163,176 @@ _KNOWN = {"format", "version", "clip", "frame_start", "north_offset_deg",
           "method", "initial", "frames"}
 
 
+def _number(value: Any, what: str, low: float = -math.inf, high: float = math.inf,
+            allow_null: bool = True) -> Optional[float]:
+    """A finite JSON number in [low, high] (bools are not numbers), or None
+    for null when allowed; raises ValueError naming `what`."""
+    if value is None:
+        if allow_null:
+            return None
+        raise ValueError(f"{what} is missing")
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{what} is {value!r}, not a number")
+    value = float(value)
+    if not math.isfinite(value):
+        # JSON has no NaN (our writer turns one into null): a file with one
+        # was not written by us, and a NaN read as 0 would be a wrong answer.
+        raise ValueError(f"{what} is {value}, not a finite number")
+    if not low <= value <= high:
+        raise ValueError(f"{what} is {value}, outside [{low:g}, {high:g}]")
+    return value
+
+
+def _integer(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            not math.isfinite(value) or value != int(value) or abs(value) > 2 ** 31:
+        raise ValueError(f"{what} is {value!r}, not a whole number")
+    return int(value)
+
+
+def _text(value: Any, what: str) -> Optional[str]:
+    if value is None or isinstance(value, str):
+        return value
+    raise ValueError(f"{what} is {value!r}, not text")
+
+
+def _pixel(value: Any, what: str) -> List[float]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise ValueError(f"{what} is {value!r}, not a pixel [x, y]")
+    return [_number(v, what, allow_null=False) for v in value]
+
+
+def _frame_from_json(fd: Any) -> FrameEstimate:
+    if not isinstance(fd, dict):
+        raise ValueError("not an object")
+    shadow = fd.get("shadow")
+    start = end = None
+    if shadow is not None:
+        if not isinstance(shadow, dict):
+            raise ValueError(f"shadow is {shadow!r}, not an object")
+        start = _pixel(shadow.get("start_px"), "shadow.start_px")
+        end = _pixel(shadow.get("end_px"), "shadow.end_px")
+    if "frame" not in fd:
+        raise ValueError("it has no frame number")
+    f = FrameEstimate(
+        frame=_integer(fd["frame"], "frame"),
+        zenith_deg=_number(fd.get("zenith_deg"), "zenith_deg", 0.0, 180.0),
+        azimuth_deg=_number(fd.get("azimuth_deg"), "azimuth_deg", -1e6, 1e6),
+        raw_zenith_deg=_number(fd.get("raw_zenith_deg"), "raw_zenith_deg", 0.0, 180.0),
+        raw_azimuth_deg=_number(fd.get("raw_azimuth_deg"), "raw_azimuth_deg", -1e6, 1e6),
+        confidence=_number(fd.get("confidence"), "confidence", 0.0, 1.0) or 0.0,
+        shadow_start_px=start, shadow_end_px=end,
+        reason=_text(fd.get("reason"), "reason"),
+        sun_ambient_ratio=_number(fd.get("sun_ambient_ratio"), "sun_ambient_ratio", 0.0),
+        time_utc=_text(fd.get("time_utc"), "time_utc"))
+    # One angle without the other is no estimate.
+    if (f.zenith_deg is None) != (f.azimuth_deg is None):
+        f.zenith_deg = f.azimuth_deg = None
+        f.reason = f.reason or "no estimate"
+    return f
+
+
+_INITIAL_NUMBERS = ("zenith_deg", "azimuth_deg", "residual", "confidence", "spread_deg",
+                    "sun_intensity", "ambient_intensity", "seconds")
+
+
 def from_json(d: Dict[str, Any], source: str = "<track>") -> Track:
+    """A Track from parsed JSON, validated once here: every number finite and
+    in range, every pixel a pair of numbers, frames unique and sorted, so
+    that code downstream (panel, overlay, Apply, Export) may trust it.
+    Raises TrackFileError (and nothing else) naming `source` and the fault."""
     if not isinstance(d, dict):
         raise TrackFileError(f"{source}: not a JSON object")
     fmt = d.get("format")
     if fmt not in (FORMAT_TRACK, FORMAT_TRUTH):
-        raise TrackFileError(f"{source}: format is {fmt!r}, expected "
+        shown = fmt if isinstance(fmt, (str, int, float, type(None))) else type(fmt).__name__
+        raise TrackFileError(f"{source}: format is {shown!r}, expected "
                              f"{FORMAT_TRACK!r} or {FORMAT_TRUTH!r}")
     version = d.get("version")
-    if not isinstance(version, int) or version > VERSION or version < 1:
-        raise TrackFileError(f"{source}: unsupported version {version!r} "
+    if isinstance(version, bool) or not isinstance(version, int) or \
+            version > VERSION or version < 1:
+        shown = version if isinstance(version, (int, float, str, type(None))) else \
+            type(version).__name__
+        raise TrackFileError(f"{source}: unsupported version {shown!r} "
                              f"(this reader knows 1..{VERSION})")
+    try:
+        clip = _text(d.get("clip"), "clip") or ""
+        frame_start = 1 if d.get("frame_start") is None else \
+            _integer(d.get("frame_start"), "frame_start")
+        north = _number(d.get("north_offset_deg"), "north_offset_deg", -1e6, 1e6) or 0.0
+        method = d.get("method")
+        if method is None:
+            method = {}
+        if not isinstance(method, dict):
+            raise ValueError(f"method is {type(method).__name__}, not an object")
+        initial = d.get("initial")
+        if initial is not None:
+            if not isinstance(initial, dict):
+                raise ValueError(f"initial is {type(initial).__name__}, not an object")
+            initial = dict(initial)
+            for key in _INITIAL_NUMBERS:
+                if key in initial:
+                    initial[key] = _number(initial[key], f"initial.{key}")
+            if "frame" in initial and initial["frame"] is not None:
+                initial["frame"] = _integer(initial["frame"], "initial.frame")
+            if initial.get("zenith_deg") is not None and not 0 <= initial["zenith_deg"] <= 180:
+                raise ValueError(f"initial.zenith_deg is {initial['zenith_deg']}, "
+                                 f"outside [0, 180]")
+        raw_frames = d.get("frames")
+        if raw_frames is None:
+            raw_frames = []
+        if not isinstance(raw_frames, list):
+            raise ValueError(f"frames is {type(raw_frames).__name__}, not a list")
+    except ValueError as e:
+        raise TrackFileError(f"{source}: {e}")
     frames = []
-    for i, fd in enumerate(d.get("frames") or []):
+    seen = set()
+    for i, fd in enumerate(raw_frames):
         try:
-            shadow = fd.get("shadow") or {}
-            frames.append(FrameEstimate(
-                frame=int(fd["frame"]),
-                zenith_deg=_num(fd.get("zenith_deg")),
-                azimuth_deg=_num(fd.get("azimuth_deg")),
-                raw_zenith_deg=_num(fd.get("raw_zenith_deg")),
-                raw_azimuth_deg=_num(fd.get("raw_azimuth_deg")),
-                confidence=float(fd.get("confidence") or 0.0),
-                shadow_start_px=shadow.get("start_px"),
-                shadow_end_px=shadow.get("end_px"),
-                reason=fd.get("reason"),
-                sun_ambient_ratio=_num(fd.get("sun_ambient_ratio")),
-                time_utc=fd.get("time_utc"),
-            ))
-        except (KeyError, TypeError, ValueError) as e:
+            f = _frame_from_json(fd)
+        except ValueError as e:
             raise TrackFileError(f"{source}: frame entry {i} is malformed: {e}")
+        if f.frame in seen:
+            raise TrackFileError(f"{source}: frame {f.frame} is listed twice")
+        seen.add(f.frame)
+        frames.append(f)
+    frames.sort(key=lambda f: f.frame)
     return Track(
-        clip=str(d.get("clip") or ""),
-        frame_start=int(d.get("frame_start") or 1),
-        north_offset_deg=float(d.get("north_offset_deg") or 0.0),
+        clip=clip,
+        frame_start=frame_start,
+        north_offset_deg=north,
         format=fmt,
-        method=d.get("method") or {},
-        initial=d.get("initial"),
+        method=method,
+        initial=initial,
         frames=frames,
         extra={k: v for k, v in d.items() if k not in _KNOWN},
     )
 
 
+def loads(text: str, source: str = "<track>") -> Track:
+    """A Track from JSON text; raises TrackFileError only."""
+    try:
+        d = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise TrackFileError(f"{source}: not valid JSON ({e})")
+    except (RecursionError, MemoryError, TypeError, ValueError) as e:
+        raise TrackFileError(f"{source}: not readable JSON ({type(e).__name__})")
+    return from_json(d, source=source)
+
+
 def read_track(path: str) -> Track:
     """Reads a track or truth file; raises TrackFileError with the reason."""
     try:
-        with open(path, "r", encoding="utf-8") as fh:
-            d = json.load(fh)
+        with open(path, "rb") as fh:
+            data = fh.read()
     except FileNotFoundError:
         raise TrackFileError(f"{path}: no such file")
-    except json.JSONDecodeError as e:
-        raise TrackFileError(f"{path}: not valid JSON ({e})")
-    return from_json(d, source=path)
+    except IsADirectoryError:
+        raise TrackFileError(f"{path}: is a folder, not a track file")
+    except OSError as e:
+        raise TrackFileError(f"{path}: cannot be read ({e.strerror or e})")
+    try:
+        text = data.decode("utf-8-sig")  # a byte-order mark from an editor is fine
+    except UnicodeDecodeError as e:
+        raise TrackFileError(f"{path}: not UTF-8 text (byte {e.start})")
+    return loads(text, source=path)
