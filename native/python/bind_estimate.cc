@@ -141,6 +141,18 @@ void BindEstimate(py::module_& m) {
       .def_readonly("shadow_end_px", &TrackedFrame::shadow_end_px)
       .def_readonly("seconds", &TrackedFrame::seconds);
 
+  py::enum_<FrameStatus>(m, "FrameStatus", "What became of one frame a VideoReader returned.")
+      .value("ok", FrameStatus::kOk)
+      .value("undecodable", FrameStatus::kUndecodable)
+      .value("size_changed", FrameStatus::kSizeChanged)
+      .value("missing_file", FrameStatus::kMissingFile);
+  py::class_<FrameReport>(m, "FrameReport")
+      .def_readonly("index", &FrameReport::index)
+      .def_readonly("status", &FrameReport::status)
+      .def_readonly("width", &FrameReport::width)
+      .def_readonly("height", &FrameReport::height)
+      .def_readonly("message", &FrameReport::message);
+
   py::class_<VideoReader>(m, "VideoReader",
                           "Frames of a movie file or a numbered image sequence, streamed.")
       .def(py::init<const std::string&>(), py::arg("path"))
@@ -149,6 +161,12 @@ void BindEstimate(py::module_& m) {
       .def_property_readonly("fps", &VideoReader::fps)
       .def_property_readonly("num_frames", &VideoReader::num_frames)
       .def_property_readonly("position", &VideoReader::position)
+      .def_property_readonly("num_frames_exact", &VideoReader::num_frames_exact)
+      .def_property_readonly("is_sequence", &VideoReader::is_sequence)
+      .def_property_readonly("last_frame", &VideoReader::last_frame,
+                             "FrameReport of the last read(): status, index, decoded size.")
+      .def("count_frames", &VideoReader::CountFrames, py::call_guard<py::gil_scoped_release>(),
+           "Counts a movie's frames in the file (no decoding); num_frames is exact after.")
       .def(
           "read",
           [](VideoReader& r) -> py::object {
@@ -164,7 +182,10 @@ void BindEstimate(py::module_& m) {
           },
           "Next frame as uint8 (H,W,3) BGR; None for a frame that cannot be "
           "decoded; raises StopIteration at the end.")
-      .def("seek", &VideoReader::Seek, py::arg("index"));
+      .def("seek", &VideoReader::Seek, py::arg("index"),
+           py::call_guard<py::gil_scoped_release>())
+      .def("__iter__", [](py::object self) { return self; })
+      .def("__next__", [](py::object self) { return self.attr("read")(); });
 
   m.def(
       "detect_unmodelled_shadows",
