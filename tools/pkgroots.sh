@@ -5,6 +5,8 @@
 #   bash tools/pkgroots.sh py313      Python 3.13 headers + pybind11 (trixie)
 #   bash tools/pkgroots.sh trixie     Blender 4.3 + its closure, unpacked
 #   bash tools/pkgroots.sh bookworm   a debootstrap root with only Blender 3.4
+#   bash tools/pkgroots.sh ffmpeg     a small static FFmpeg for the release module
+#   bash tools/pkgroots.sh run NAME CMD...   CMD chrooted in a root
 set -euo pipefail
 _here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 ROOTS_DIR="${SUNLAPSE_ROOTS_DIR:-${SUNLAPSE_BUILD_DIR:-$_here/build}/roots}"
@@ -56,6 +58,44 @@ ensure_py313() {
   touch "$dest/.done"
 }
 
+# A small static FFmpeg (libavformat/libavcodec/libswscale) built from
+# Debian 12's own source package: only the demuxers and decoders a clip or an
+# image sequence needs and no external codec libraries, so the packaged module
+# does not carry x264/x265/libvpx/gnutls/... (Debian's shared FFmpeg pulls
+# ~140 libraries, ~200 MB). Its symbols stay hidden inside _native.
+ensure_ffmpeg() {
+  local dest="$ROOTS_DIR/ffmpeg" src="$ROOTS_DIR/ffmpeg-src" d="$ROOTS_DIR/apt-bookworm-src"
+  if [ -f "$dest/.done" ]; then return; fi
+  if ! ls "$src"/ffmpeg_*.orig.tar.* >/dev/null 2>&1; then
+    mkdir -p "$d/state/lists/partial" "$d/cache/archives/partial" "$d/none" "$src"
+    : >"$d/state/status"
+    echo "deb-src [signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] $(debian_mirror) bookworm main" \
+      >"$d/sources.list"
+    local opts=(-o Dir::State="$d/state" -o Dir::State::status="$d/state/status"
+      -o Dir::Cache="$d/cache" -o Dir::Etc::SourceList="$d/sources.list"
+      -o Dir::Etc::SourceParts="$d/none" -o Acquire::Languages=none -o Debug::NoLocking=true)
+    apt-get -q "${opts[@]}" update >/dev/null
+    (cd "$src" && apt-get -q "${opts[@]}" source --download-only ffmpeg >/dev/null)
+  fi
+  rm -rf "$src/tree" && mkdir -p "$src/tree"
+  tar -xf "$(ls "$src"/ffmpeg_*.orig.tar.* | head -1)" -C "$src/tree" --strip-components=1
+  local demuxers="mov,matroska,avi,mpegts,mxf,m4v,h264,hevc,mjpeg,ivf,image2"
+  demuxers+=",image_png_pipe,image_jpeg_pipe,image_tiff_pipe,image_bmp_pipe,image_webp_pipe,image_exr_pipe"
+  local decoders="h264,hevc,mpeg4,mpeg1video,mpeg2video,mjpeg,prores,dnxhd,vp8,vp9,dvvideo"
+  decoders+=",ffv1,rawvideo,qtrle,h263,png,tiff,bmp,webp,exr"
+  local parsers="h264,hevc,mpeg4video,mpegvideo,mjpeg,png,vp8,vp9,bmp,webp,dnxhd"
+  (cd "$src/tree" && ./configure --prefix="$dest" --enable-pic --enable-static --disable-shared \
+      --disable-programs --disable-doc --disable-network --disable-autodetect \
+      --disable-everything --disable-avdevice --disable-avfilter --disable-swresample \
+      --disable-postproc --enable-zlib --enable-protocol=file \
+      --enable-demuxer="$demuxers" --enable-decoder="$decoders" --enable-parser="$parsers" \
+      >"$ROOTS_DIR/ffmpeg-configure.log" 2>&1 \
+    && make -j"$(nproc)" >"$ROOTS_DIR/ffmpeg-make.log" 2>&1 && make install >/dev/null 2>&1) \
+    || { tail -20 "$ROOTS_DIR/ffmpeg-configure.log" "$ROOTS_DIR/ffmpeg-make.log" >&2; return 1; }
+  rm -rf "$src/tree"
+  touch "$dest/.done"
+}
+
 # Blender 4.3 (Python 3.13) with its whole closure, from trixie, unpacked.
 ensure_trixie() {
   local dest="$ROOTS_DIR/trixie"
@@ -100,14 +140,17 @@ ensure_bookworm() {
   touch "$dest/.done"
 }
 
-# Runs a command chrooted in ROOT with /proc and /dev, in a private mount
-# namespace (the mounts vanish with the command). Usage: in_root ROOT CMD...
+# Runs a command chrooted in ROOT with /proc, /dev and the source tree (at
+# its own path), in a private mount namespace (the mounts vanish with the
+# command). Usage: in_root ROOT CMD...
 in_root() {
   local root="$1"; shift
+  mkdir -p "$root$_here" "$root/proc" "$root/dev" "$root/tmp"
   unshare --mount --propagation private -- sh -c '
-    root="$1"; shift
+    root="$1"; here="$2"; shift 2
     mount -t proc proc "$root/proc" && mount --rbind /dev "$root/dev" &&
-    mount -t tmpfs tmpfs "$root/tmp" && exec chroot "$root" "$@"' sh "$root" "$@"
+    mount -t tmpfs tmpfs "$root/tmp" && mount --bind "$here" "$root$here" &&
+    cd / && exec chroot "$root" "$@"' sh "$root" "$_here" "$@"
 }
 
 if [ "${BASH_SOURCE[0]}" = "$0" ]; then
@@ -116,7 +159,11 @@ if [ "${BASH_SOURCE[0]}" = "$0" ]; then
       py313) ensure_py313 ;;
       trixie) ensure_trixie ;;
       bookworm) ensure_bookworm ;;
-      *) echo "pkgroots: unknown root '$what' (valid: py313, trixie, bookworm)" >&2; exit 2 ;;
+      ffmpeg) ensure_ffmpeg ;;
+      run)  # run NAME CMD...: a command inside a root (e.g. trixie's Blender)
+        shift; name="${1:?run needs a root name}"; shift
+        in_root "$ROOTS_DIR/$name" "$@"; exit $? ;;
+      *) echo "pkgroots: unknown root '$what' (valid: py313, trixie, bookworm, ffmpeg)" >&2; exit 2 ;;
     esac
   done
 fi
