@@ -6,7 +6,9 @@ Where the module comes from, first found wins:
   sunlapse_native (a wheel)              the Blender 4.2+ extension (Blender installs
                                          the wheel into its extensions' site-packages)
 Packaged modules carry their libraries in sunlapse_native/libs/ (RUNPATH
-$ORIGIN); Python picks the module whose suffix matches its own ABI.
+$ORIGIN; renamed libraries and symbols in release builds, so a host's own
+Embree, OpenCV ... never stand in for them); Python picks the module whose
+suffix matches its own ABI.
 
 When nothing loads, DIAGNOSIS says which file, which library or Python
 version is missing, and which Blender and Python were found.
@@ -30,32 +32,16 @@ def _import_plain(name):
     return importlib.import_module(name, __package__)
 
 
-def _import_packaged(name):
-    """Imports a bundled module with RTLD_DEEPBIND where there is one: its
-    libraries then resolve their symbols among themselves first, not in a
-    host's same-named ones (Blender 4.x loads Embree 4, whose C functions
-    have Embree 3's names)."""
-    deepbind = getattr(os, "RTLD_DEEPBIND", 0)
-    if not deepbind:
-        return importlib.import_module(name, __package__)
-    old = sys.getdlopenflags()
-    sys.setdlopenflags(os.RTLD_NOW | deepbind)
-    try:
-        return importlib.import_module(name, __package__)
-    finally:
-        sys.setdlopenflags(old)
-
-
 def _candidates():
     """(import name, loader, folder) in the order tried."""
     yield "._native", _import_plain, ADDON_DIR
-    yield ".sunlapse_native._native", _import_packaged, os.path.join(ADDON_DIR, "sunlapse_native")
+    yield ".sunlapse_native._native", _import_plain, os.path.join(ADDON_DIR, "sunlapse_native")
     for entry in sys.path:
         folder = os.path.join(entry, "sunlapse_native")
         if os.path.isdir(folder):
-            yield "sunlapse_native._native", _import_packaged, folder
+            yield "sunlapse_native._native", _import_plain, folder
             return
-    yield "sunlapse_native._native", _import_packaged, None
+    yield "sunlapse_native._native", _import_plain, None
 
 
 def _load():

@@ -1,6 +1,6 @@
 """Builds the installable packages of the add-on with its compiled module(s).
 
-  python3 tools/package.py OUT_DIR MODULE.so [MODULE.so ...] [--blender CMD]
+  python3 tools/package.py OUT_DIR MODULE.so [MODULE.so ...] [--blender CMD] [--patchelf CMD]
   (or: cmake --build build --target package_addon; a release: bash tools/release.sh)
 
 MODULE.so: _native built for CPython 3.11 and/or 3.13. Each module and exactly
@@ -18,6 +18,8 @@ system basics (SYSTEM_LIBS) are left to the machine. Writes into OUT_DIR:
 With --blender CMD (a Blender 4.2+ command line), the extension is built and
 validated by Blender itself (`-c extension build --split-platforms`,
 `-c extension validate`); without it, zipped here with the same layout.
+With --patchelf CMD (patchelf 0.18+), the bundled libraries and their symbols
+get names of their own (isolate()), as release builds do.
 Test footage (../shared/real) and the build tree never go in.
 """
 import base64
@@ -109,6 +111,48 @@ def bundle(modules, dest):
     return sorted(needed)
 
 
+def _defined_symbols(path):
+    out = subprocess.run(["nm", "-D", "--defined-only", "--without-symbol-versions",
+                          "--format=posix", path], capture_output=True, text=True).stdout
+    return {line.split()[0] for line in out.splitlines() if line.strip()}
+
+
+def isolate(dest, patchelf):
+    """Gives the bundled libraries names of their own (SONAME prefix
+    'sunlapse-') and prefixes every dynamic symbol they define (in them and in
+    the modules), so a host that has loaded its own Embree, OpenCV, TBB ...
+    (Blender 4.x: Embree 4, whose C functions carry Embree 3's names; trixie's
+    OpenCV 4.10) never stands in for ours, and ours never for its. Needs
+    patchelf 0.18+ (--rename-dynamic-symbols)."""
+    libs_dir = os.path.join(dest, "libs")
+    libs = sorted(os.listdir(libs_dir))
+    modules = [os.path.join(dest, f) for f in os.listdir(dest) if f.endswith(".so")]
+    system = set()
+    for name, path in ldd(modules[0]):
+        if name in SYSTEM_LIBS and path and os.path.exists(path):
+            system |= _defined_symbols(path)
+    symbols = set()
+    for lib in libs:
+        symbols |= _defined_symbols(os.path.join(libs_dir, lib))
+    symbols -= system
+    symbols -= {"_init", "_fini", "_edata", "_end", "__bss_start"}
+    map_path = os.path.join(dest, os.pardir, "symbols.map")
+    with open(map_path, "w") as fh:
+        fh.writelines(f"{s} sunlapse_{s}\n" for s in sorted(symbols))
+    renamed = {lib: "sunlapse-" + lib for lib in libs}
+    for path in [os.path.join(libs_dir, lib) for lib in libs] + modules:
+        args = [*patchelf, "--rename-dynamic-symbols", map_path]
+        for old, new in renamed.items():
+            args += ["--replace-needed", old, new]
+        if os.path.dirname(path) == libs_dir:
+            args += ["--set-soname", renamed[os.path.basename(path)]]
+        subprocess.run(args + [path], check=True, capture_output=True)
+    for old, new in renamed.items():
+        os.rename(os.path.join(libs_dir, old), os.path.join(libs_dir, new))
+    os.remove(map_path)
+    return len(symbols)
+
+
 def check_self_contained(dest):
     """Every library of every file in `dest` resolves inside `dest` or is a
     system basic (ldd, no library path)."""
@@ -164,8 +208,11 @@ def _manifest_with_wheel(text, wheel_rel):
     return text[:m.start()] + line + "\n" + text[m.start():] if m else text + line
 
 
-def build(modules, out_dir, blender=None):
-    """Writes the 3.x add-on zip and the extension into out_dir; returns their paths."""
+def build(modules, out_dir, blender=None, patchelf=None):
+    """Writes the 3.x add-on zip and the extension into out_dir; returns their
+    paths. `blender`: a Blender 4.2+ command line to build and validate the
+    extension; `patchelf`: a patchelf 0.18+ command line to isolate() the
+    bundled libraries (release builds)."""
     if isinstance(modules, str):
         modules = [modules]
     manifest_path = os.path.join(ROOT, "blender_manifest.toml")
@@ -183,6 +230,9 @@ def build(modules, out_dir, blender=None):
     legacy_modules = [m for m in modules if python_tag(m) == "cp311"] or modules
     legacy_dir = os.path.join(stage, "legacy", "sunlapse")
     bundle(legacy_modules, os.path.join(legacy_dir, "sunlapse_native"))
+    if patchelf:
+        isolate(os.path.join(legacy_dir, "sunlapse_native"), shlex.split(patchelf))
+        check_self_contained(os.path.join(legacy_dir, "sunlapse_native"))
     legacy = os.path.join(out_dir, f"sunlapse-{version}-addon.zip")
     with zipfile.ZipFile(legacy, "w", zipfile.ZIP_DEFLATED) as z:
         for path, rel in addon_files():
@@ -195,6 +245,9 @@ def build(modules, out_dir, blender=None):
     # Blender 4.2+: the extension with one wheel for every Python built.
     native_dir = os.path.join(stage, "native", "sunlapse_native")
     bundle(modules, native_dir)
+    if patchelf:
+        isolate(native_dir, shlex.split(patchelf))
+        check_self_contained(native_dir)
     ext_dir = os.path.join(stage, "extension")
     os.makedirs(os.path.join(ext_dir, "wheels"))
     whl = wheel(native_dir, os.path.join(ext_dir, "wheels"), version, tags)
@@ -230,17 +283,18 @@ def build(modules, out_dir, blender=None):
 
 
 def main(argv):
-    blender = None
-    if "--blender" in argv:
-        i = argv.index("--blender")
-        if i + 1 >= len(argv):
-            sys.exit("package: --blender needs a command line (a Blender 4.2+)")
-        blender = argv[i + 1]
-        argv = argv[:i] + argv[i + 2:]
+    tools = {"--blender": None, "--patchelf": None}
+    for flag in tools:
+        if flag in argv:
+            i = argv.index(flag)
+            if i + 1 >= len(argv):
+                sys.exit(f"package: {flag} needs a command line")
+            tools[flag] = argv[i + 1]
+            argv = argv[:i] + argv[i + 2:]
     if len(argv) < 2:
         sys.exit(__doc__)
     try:
-        paths = build(argv[1:], argv[0], blender)
+        paths = build(argv[1:], argv[0], tools["--blender"], tools["--patchelf"])
     except PackageError as e:
         sys.exit(f"package: {e}")
     for p in paths:

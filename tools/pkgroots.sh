@@ -104,7 +104,8 @@ ensure_trixie() {
   local d="$_trixie_apt_dir"
   trixie_apt_update
   rm -rf "$d/cache/archives"/*.deb
-  trixie_apt install -y --download-only blender python3-numpy >/dev/null
+  # patchelf 0.18 (trixie's) renames symbols for the release packages.
+  trixie_apt install -y --download-only blender python3-numpy patchelf >/dev/null
   mkdir -p "$dest"
   local n=0 deb
   for deb in "$d"/cache/archives/*.deb; do dpkg-deb -x "$deb" "$dest"; n=$((n + 1)); done
@@ -116,6 +117,7 @@ ensure_trixie() {
   for so in "$lib"/blas/libblas.so.3 "$lib"/lapack/liblapack.so.3; do
     [ -e "$so" ] && [ ! -e "$lib/$(basename "$so")" ] && ln -s "${so#"$lib/"}" "$lib/$(basename "$so")"
   done
+  ln -sf /proc/self/mounts "$dest/etc/mtab"
   mkdir -p "$dest/tmp" "$dest/proc" "$dest/dev" "$dest/work" "$dest/root"
   chmod 1777 "$dest/tmp"
   echo "pkgroots: unpacked $n trixie packages into $dest"

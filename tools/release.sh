@@ -29,4 +29,5 @@ modules=("$release_dir"/python/_native.cpython-311-x86_64-linux-gnu.so
 echo "[release] _native links $(ldd "${modules[0]}" | wc -l) libraries (ldd lines)"
 rm -rf "$release_dir/dist"
 /usr/bin/python3 "$here/tools/package.py" "$release_dir/dist" "${modules[@]}" \
-  --blender "bash $here/tools/pkgroots.sh run trixie /usr/bin/blender"
+  --blender "bash $here/tools/pkgroots.sh run trixie /usr/bin/blender" \
+  --patchelf "bash $here/tools/pkgroots.sh run trixie /usr/bin/patchelf"
