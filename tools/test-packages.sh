@@ -56,9 +56,11 @@ if [ -n "$outside" ]; then
   echo "  in the Debian 12 root, from outside the package:"; echo "$outside"; exit 1
 fi
 echo "  in the Debian 12 root: everything but the system basics from the package"
-in_root "$ROOTS_DIR/bookworm" sh -c 'dpkg-query -W -f "\${Package}\n" | grep -E \
-  "^lib(opencv|ceres|erfa|glog|gflags|cholmod|avformat|avcodec|swscale)|-dev$" \
-  | sed "s/^/  (root has) /"' || true
+# Blender 3.4 itself depends on some of the same libraries (OpenCV through
+# OpenImageIO, Embree, TBB, FFmpeg): the module must not use them (ldd above).
+echo "  the root's packages that the build also uses (Blender's own dependencies):" \
+  $(in_root "$ROOTS_DIR/bookworm" dpkg-query -W -f '${Package}\n' | grep -E \
+    "^lib(opencv|ceres|erfa|glog|gflags|cholmod|embree|tbb|avformat|avcodec|swscale)|-dev$" || true)
 
 echo "== the scene (source tree, this machine's Blender 3.4)"
 scene="$out/scene"
@@ -89,12 +91,13 @@ grep "^native:" "$out/blender-3.4.log" | sed 's/^/  /'
 
 echo "== (b) Blender 4.3 / Python 3.13 from trixie: the extension"
 user43="$out/user-4.3" && rm -rf "$user43" && mkdir -p "$user43"
-b43=(in_root "$ROOTS_DIR/trixie" env HOME=/tmp BLENDER_USER_RESOURCES="$user43" /usr/bin/blender)
-"${b43[@]}" -b -c extension install-file -r user_default --enable "$extension_zip" \
+# (the trixie prefix has no coreutils: the environment is set out here)
+b43() { HOME=/tmp BLENDER_USER_RESOURCES="$user43" in_root "$ROOTS_DIR/trixie" /usr/bin/blender "$@"; }
+b43 -b -c extension install-file -r user_default --enable "$extension_zip" \
   >"$out/blender-4.3-install.log" 2>&1 || { tail -15 "$out/blender-4.3-install.log"; exit 1; }
-"${b43[@]}" -b -c sunlapse "$scene/scene.blend" --out "$out/blender-4.3.sun.json" \
+b43 -b -c sunlapse "$scene/scene.blend" --out "$out/blender-4.3.sun.json" \
   >"$out/blender-4.3.log" 2>&1 || { tail -15 "$out/blender-4.3.log"; exit 1; }
-"${b43[@]}" -b --python-expr "
+b43 -b --python-expr "
 import sys, addon_utils
 print('python', sys.version.split()[0])
 import sunlapse_native._native as n; print('native:', n.__file__)
