@@ -149,10 +149,14 @@ def diagnose(errors):
     matching = [f for f in files if f.endswith(suffix)]
     if not matching:
         built = ", ".join(_python_of(f) for f in files)
-        return [f"The native core here is built for {built}; this Blender runs another Python.",
-                f"Files: {', '.join(files)}", found,
-                "Packages carry modules for Python 3.11 (Blender 4.2-4.5, Debian's 3.4) "
-                "and 3.13 (Blender 5.x)."]
+        lines = [f"The native core here is built for {built}; this Blender runs another Python.",
+                 f"Files: {', '.join(files)}", found,
+                 "Packages carry modules for Python 3.11 (Blender 4.2-4.5, Debian's 3.4) "
+                 "and 3.13 (Blender 5.x)."]
+        if SOURCE_CHECKOUT:
+            lines.append("From the sunlapse source folder, bash tools/release.sh builds "
+                         "packages with both (build/release/dist).")
+        return lines
     lines = [f"The native core {matching[0]} does not load."]
     gone = missing_libraries(matching[0])
     if gone:
