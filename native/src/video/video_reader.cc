@@ -34,7 +34,8 @@ std::string AvError(int err) {
 }
 
 void QuietFfmpeg() {
-  // FFmpeg prints every concealed error to stderr; the reader reports per frame.
+  // FFmpeg prints every concealed error to stderr; the reader reports per
+  // frame.
   static std::once_flag once;
   std::call_once(once, [] { av_log_set_level(AV_LOG_FATAL); });
 }
@@ -62,15 +63,20 @@ class Decoder {
     // Images carry their codec in the name or the header; probing decodes.
     if (!single_image || format_->nb_streams == 0 ||
         format_->streams[0]->codecpar->codec_id == AV_CODEC_ID_NONE) {
-      if ((err = avformat_find_stream_info(format_, nullptr)) < 0) return AvError(err);
+      if ((err = avformat_find_stream_info(format_, nullptr)) < 0)
+        return AvError(err);
     }
     const AVCodec* codec = nullptr;
-    stream_ = av_find_best_stream(format_, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
-    if (stream_ < 0 || codec == nullptr) return "no video stream with a known codec";
+    stream_ =
+        av_find_best_stream(format_, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
+    if (stream_ < 0 || codec == nullptr)
+      return "no video stream with a known codec";
     codec_ = avcodec_alloc_context3(codec);
-    if ((err = avcodec_parameters_to_context(codec_, format_->streams[stream_]->codecpar)) < 0)
+    if ((err = avcodec_parameters_to_context(
+             codec_, format_->streams[stream_]->codecpar)) < 0)
       return AvError(err);
-    codec_->thread_count = single_image ? 1 : 0;  // 0: FFmpeg picks (one per core)
+    codec_->thread_count =
+        single_image ? 1 : 0;  // 0: FFmpeg picks (one per core)
     if ((err = avcodec_open2(codec_, codec, nullptr)) < 0) return AvError(err);
     packet_ = av_packet_alloc();
     frame_ = av_frame_alloc();
@@ -107,7 +113,8 @@ class Decoder {
 
   // Positions the demuxer at or before `timestamp` (stream time base).
   bool SeekTo(int64_t timestamp) {
-    if (av_seek_frame(format_, stream_, timestamp, AVSEEK_FLAG_BACKWARD) < 0) return false;
+    if (av_seek_frame(format_, stream_, timestamp, AVSEEK_FLAG_BACKWARD) < 0)
+      return false;
     avcodec_flush_buffers(codec_);
     flushed_ = false;
     return true;
@@ -117,9 +124,10 @@ class Decoder {
   // swscale's default colour matrix) so tracks match those read through it.
   void ToBgr(cv::Mat* bgr) {
     const AVFrame* f = frame_;
-    sws_ = sws_getCachedContext(sws_, f->width, f->height, static_cast<AVPixelFormat>(f->format),
-                                f->width, f->height, AV_PIX_FMT_BGR24, SWS_BICUBIC, nullptr,
-                                nullptr, nullptr);
+    sws_ = sws_getCachedContext(sws_, f->width, f->height,
+                                static_cast<AVPixelFormat>(f->format), f->width,
+                                f->height, AV_PIX_FMT_BGR24, SWS_BICUBIC,
+                                nullptr, nullptr, nullptr);
     if (sws_ == nullptr) {
       bgr->release();
       return;
@@ -161,14 +169,16 @@ std::string DecodeImage(const std::string& path, cv::Mat* bgr) {
 struct VideoReader::Movie {
   Decoder decoder;
   int64_t first_pts = 0;  // of frame 0, in the stream's time base
-  bool pending = false;   // decoder.frame() is frame `position_`, not yet returned
+  bool pending =
+      false;  // decoder.frame() is frame `position_`, not yet returned
   double frame_seconds = 0.0;
 
   // 0-based frame index of decoder.frame(), from its time stamp.
   int64_t IndexOfFrame() const {
     const int64_t pts = decoder.frame()->best_effort_timestamp;
     if (pts == AV_NOPTS_VALUE || frame_seconds <= 0.0) return -1;
-    const double seconds = (pts - first_pts) * av_q2d(decoder.stream()->time_base);
+    const double seconds =
+        (pts - first_pts) * av_q2d(decoder.stream()->time_base);
     return std::llround(seconds / frame_seconds);
   }
 };
@@ -181,7 +191,8 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
   std::smatch m;
   const std::string name = p.filename().string();
   static const std::regex kNumbered(R"((.*?)(\d+)(\.[A-Za-z]+)$)");
-  if (IsImageExtension(p.extension().string()) && std::regex_match(name, m, kNumbered)) {
+  if (IsImageExtension(p.extension().string()) &&
+      std::regex_match(name, m, kNumbered)) {
     is_sequence_ = true;
     const std::string stem = m[1].str();
     prefix_ = (p.parent_path() / stem).string();
@@ -191,21 +202,25 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
     // The sequence runs to the highest number present: a gap is missing
     // frames, not the end of the clip.
     int last_number = first_number_;
-    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    const fs::path dir =
+        p.parent_path().empty() ? fs::path(".") : p.parent_path();
     for (const auto& entry : fs::directory_iterator(dir)) {
       const std::string other = entry.path().filename().string();
-      if (other.size() <= stem.size() + suffix_.size() || other.compare(0, stem.size(), stem) ||
-          other.compare(other.size() - suffix_.size(), suffix_.size(), suffix_)) {
+      if (other.size() <= stem.size() + suffix_.size() ||
+          other.compare(0, stem.size(), stem) ||
+          other.compare(other.size() - suffix_.size(), suffix_.size(),
+                        suffix_)) {
         continue;
       }
-      const std::string digits =
-          other.substr(stem.size(), other.size() - stem.size() - suffix_.size());
+      const std::string digits = other.substr(
+          stem.size(), other.size() - stem.size() - suffix_.size());
       if (digits.empty() || digits.size() > 9 ||
           digits.find_first_not_of("0123456789") != std::string::npos) {
         continue;
       }
       // Zero-padded names keep their width; unpadded ones may grow.
-      if (digits_ > 1 && m[2].str()[0] == '0' && static_cast<int>(digits.size()) != digits_) {
+      if (digits_ > 1 && m[2].str()[0] == '0' &&
+          static_cast<int>(digits.size()) != digits_) {
         continue;
       }
       last_number = std::max(last_number, std::stoi(digits));
@@ -215,7 +230,8 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
     cv::Mat first;
     const std::string error = DecodeImage(path, &first);
     if (!error.empty()) {
-      throw std::invalid_argument("path: cannot decode image " + path + " (" + error + ")");
+      throw std::invalid_argument("path: cannot decode image " + path + " (" +
+                                  error + ")");
     }
     width_ = first.cols;
     height_ = first.rows;
@@ -225,10 +241,12 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
   movie_ = std::make_unique<Movie>();
   const std::string error = movie_->decoder.Open(path, /*single_image=*/false);
   if (!error.empty()) {
-    throw std::invalid_argument("path: cannot open video " + path + " (" + error + ")");
+    throw std::invalid_argument("path: cannot open video " + path + " (" +
+                                error + ")");
   }
   AVStream* stream = movie_->decoder.stream();
-  const AVRational rate = av_guess_frame_rate(movie_->decoder.format(), stream, nullptr);
+  const AVRational rate =
+      av_guess_frame_rate(movie_->decoder.format(), stream, nullptr);
   fps_ = rate.num > 0 && rate.den > 0 ? av_q2d(rate) : 0.0;
   movie_->frame_seconds = fps_ > 0.0 ? 1.0 / fps_ : 0.0;
   if (stream->nb_frames > 0) {
@@ -239,7 +257,8 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
     if (stream->duration != AV_NOPTS_VALUE) {
       seconds = stream->duration * av_q2d(stream->time_base);
     } else if (movie_->decoder.format()->duration != AV_NOPTS_VALUE) {
-      seconds = movie_->decoder.format()->duration / static_cast<double>(AV_TIME_BASE);
+      seconds = movie_->decoder.format()->duration /
+                static_cast<double>(AV_TIME_BASE);
     }
     num_frames_ = static_cast<int>(std::llround(seconds * fps_));
   }
@@ -269,10 +288,12 @@ int VideoReader::CountFrames() {
   if (is_sequence_ || num_frames_exact_) return num_frames_;
   // A second demuxer, so the reading position is untouched.
   AVFormatContext* format = nullptr;
-  if (avformat_open_input(&format, path_.c_str(), nullptr, nullptr) < 0) return num_frames_;
+  if (avformat_open_input(&format, path_.c_str(), nullptr, nullptr) < 0)
+    return num_frames_;
   int count = 0;
   if (avformat_find_stream_info(format, nullptr) >= 0) {
-    const int stream = av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
+    const int stream =
+        av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
     AVPacket* packet = av_packet_alloc();
     while (stream >= 0 && av_read_frame(format, packet) >= 0) {
       count += packet->stream_index == stream;
@@ -314,8 +335,8 @@ bool VideoReader::ReadSequence(cv::Mat* bgr) {
     bgr->release();
     last_.status = FrameStatus::kSizeChanged;
     last_.message = file + " is " + std::to_string(last_.width) + "x" +
-                    std::to_string(last_.height) + ", the clip " + std::to_string(width_) + "x" +
-                    std::to_string(height_);
+                    std::to_string(last_.height) + ", the clip " +
+                    std::to_string(width_) + "x" + std::to_string(height_);
   }
   return true;
 }
@@ -327,7 +348,8 @@ bool VideoReader::ReadMovie(cv::Mat* bgr) {
   if (!mv.pending) {
     const int err = mv.decoder.Next();
     if (err == AVERROR_EOF) {
-      // Containers often over-report their length; the end is where reading stops.
+      // Containers often over-report their length; the end is where reading
+      // stops.
       last_.index = -1;
       return false;
     }
@@ -335,8 +357,8 @@ bool VideoReader::ReadMovie(cv::Mat* bgr) {
       bgr->release();
       ++position_;
       last_.status = FrameStatus::kUndecodable;
-      last_.message = "frame " + std::to_string(last_.index) + " cannot be decoded (" +
-                      AvError(err) + ")";
+      last_.message = "frame " + std::to_string(last_.index) +
+                      " cannot be decoded (" + AvError(err) + ")";
       return true;
     }
   }
@@ -349,15 +371,17 @@ bool VideoReader::ReadMovie(cv::Mat* bgr) {
     // Converting at the first frame's size would garble it: report, skip.
     bgr->release();
     last_.status = FrameStatus::kSizeChanged;
-    last_.message = "frame " + std::to_string(last_.index) + " is " + std::to_string(f->width) +
-                    "x" + std::to_string(f->height) + ", the clip " + std::to_string(width_) +
-                    "x" + std::to_string(height_);
+    last_.message = "frame " + std::to_string(last_.index) + " is " +
+                    std::to_string(f->width) + "x" + std::to_string(f->height) +
+                    ", the clip " + std::to_string(width_) + "x" +
+                    std::to_string(height_);
     return true;
   }
   mv.decoder.ToBgr(bgr);
   if (bgr->empty()) {
     last_.status = FrameStatus::kUndecodable;
-    last_.message = "frame " + std::to_string(last_.index) + " has an unsupported pixel format";
+    last_.message = "frame " + std::to_string(last_.index) +
+                    " has an unsupported pixel format";
   }
   return true;
 }
@@ -386,8 +410,8 @@ bool VideoReader::Seek(int index) {
   // frames' time stamps say where we are.
   const AVStream* st = mv.decoder.stream();
   const int64_t target =
-      mv.first_pts + static_cast<int64_t>(std::llround(index * mv.frame_seconds /
-                                                       av_q2d(st->time_base)));
+      mv.first_pts + static_cast<int64_t>(std::llround(
+                         index * mv.frame_seconds / av_q2d(st->time_base)));
   mv.pending = false;
   if (mv.decoder.SeekTo(target)) {
     int64_t at = -1;
@@ -432,8 +456,9 @@ cv::Mat ToLinearGray(const cv::Mat& image, double gamma) {
     gray = image;
   }
   cv::Mat out;
-  const double scale = gray.depth() == CV_8U ? 1.0 / 255.0
-                       : gray.depth() == CV_16U ? 1.0 / 65535.0 : 1.0;
+  const double scale = gray.depth() == CV_8U    ? 1.0 / 255.0
+                       : gray.depth() == CV_16U ? 1.0 / 65535.0
+                                                : 1.0;
   gray.convertTo(out, CV_32F, scale);
   if (gamma != 1.0) cv::pow(out, gamma, out);
   return out;

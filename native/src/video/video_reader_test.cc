@@ -2,12 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 #include <stdexcept>
 #include <vector>
-#include <cstdlib>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -17,14 +17,16 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("sunlapse_" + name + "_" +
-                                                  std::to_string(::getpid()));
+  const fs::path d = fs::temp_directory_path() /
+                     ("sunlapse_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
 }
 
-cv::Mat Frame(int i) { return cv::Mat(24, 32, CV_8UC3, cv::Scalar(10 * i, 20, 30)); }
+cv::Mat Frame(int i) {
+  return cv::Mat(24, 32, CV_8UC3, cv::Scalar(10 * i, 20, 30));
+}
 
 TEST(VideoReader, ReadsANumberedSequenceFromItsFirstFile) {
   const fs::path d = TempDir("seq");
@@ -107,7 +109,8 @@ TEST(VideoReader, AGapInASequenceIsReportedAndReadingGoesOn) {
 TEST(VideoReader, AFrameOfAnotherSizeIsReportedAndReadingGoesOn) {
   const fs::path d = TempDir("size");
   cv::imwrite((d / "f_01.png").string(), Frame(1));
-  cv::imwrite((d / "f_02.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
+  cv::imwrite((d / "f_02.png").string(),
+              cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
   cv::imwrite((d / "f_03.png").string(), Frame(3));
   VideoReader r((d / "f_01.png").string());
   cv::Mat f;
@@ -125,7 +128,8 @@ TEST(VideoReader, AFrameOfAnotherSizeIsReportedAndReadingGoesOn) {
 // A movie whose frames' colour encodes their index, written by OpenCV.
 std::string NumberedMovie(const fs::path& d, int n) {
   const std::string path = (d / "numbered.avi").string();
-  cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, cv::Size(32, 24));
+  cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                    cv::Size(32, 24));
   for (int i = 0; i < n; ++i) {
     w.write(cv::Mat(24, 32, CV_8UC3, cv::Scalar(2 * i, 100, 50)));
   }
@@ -150,21 +154,25 @@ TEST(VideoReader, SeeksFarForwardAndBackToTheExactFrame) {
 
 // Runs the ffmpeg command line; false when it is missing or fails.
 bool Ffmpeg(const std::string& args) {
-  return std::system(("ffmpeg -v error -y " + args + " >/dev/null 2>&1").c_str()) == 0;
+  return std::system(
+             ("ffmpeg -v error -y " + args + " >/dev/null 2>&1").c_str()) == 0;
 }
 
 TEST(VideoReader, AResolutionChangeMidStreamIsReportedPerFrame) {
   const fs::path d = TempDir("res");
   const std::string a = (d / "a.ts").string(), b = (d / "b.ts").string();
-  if (!Ffmpeg("-f lavfi -i color=c=red:s=64x48:r=10:d=0.5 -c:v mpeg2video " + a) ||
-      !Ffmpeg("-f lavfi -i color=c=blue:s=80x64:r=10:d=0.5 -c:v mpeg2video " + b)) {
+  if (!Ffmpeg("-f lavfi -i color=c=red:s=64x48:r=10:d=0.5 -c:v mpeg2video " +
+              a) ||
+      !Ffmpeg("-f lavfi -i color=c=blue:s=80x64:r=10:d=0.5 -c:v mpeg2video " +
+              b)) {
     GTEST_SKIP() << "no ffmpeg command to make the clip";
   }
   // MPEG-TS streams concatenate byte for byte; the decoder changes size.
   const std::string joined = (d / "joined.ts").string();
   {
     std::ofstream out(joined, std::ios::binary);
-    out << std::ifstream(a, std::ios::binary).rdbuf() << std::ifstream(b, std::ios::binary).rdbuf();
+    out << std::ifstream(a, std::ios::binary).rdbuf()
+        << std::ifstream(b, std::ios::binary).rdbuf();
   }
   VideoReader r(joined);
   EXPECT_EQ(r.width(), 64);

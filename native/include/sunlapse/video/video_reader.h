@@ -15,7 +15,8 @@ namespace sunlapse {
 enum class FrameStatus {
   kOk = 0,
   kUndecodable,  // the file or packet is corrupt; the frame comes back empty
-  kSizeChanged,  // decoded at another size than the first frame; comes back empty
+  kSizeChanged,  // decoded at another size than the first frame; comes back
+                 // empty
   kMissingFile,  // a sequence has no file for this number; comes back empty
 };
 
@@ -47,7 +48,8 @@ class VideoReader {
   int num_frames() const { return num_frames_; }
   bool num_frames_exact() const { return num_frames_exact_; }
   // Movies: counts the video packets of the whole file (no decoding) and
-  // makes num_frames() exact. Sequences: num_frames(). Does not move the reader.
+  // makes num_frames() exact. Sequences: num_frames(). Does not move the
+  // reader.
   int CountFrames();
   // 0-based index of the frame the next Read() returns.
   int position() const { return position_; }
