@@ -9,10 +9,11 @@ def draw_sun_panel(layout, context):
     if native_loader._native is None:
         box = layout.box()
         box.alert = True
-        box.label(text="Native core not built", icon="ERROR")
-        for line in ("From the sunlapse source folder run:",
-                     "bash tools/install.sh"):
-            box.label(text=line)
+        box.label(text="Native core not loaded", icon="ERROR")
+        import textwrap
+        for line in native_loader.DIAGNOSIS:  # why, which file/library/Python
+            for part in textwrap.wrap(line, 60):
+                box.label(text=part)
         return
     settings = context.scene.sunlapse
     col = layout.column()

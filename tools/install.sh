@@ -11,6 +11,8 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libopencv-dev libeigen3-dev libceres-dev libembree-dev libtbb-dev
   liberfa-dev pybind11-dev libgtest-dev libgmock-dev
+  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev
+  patchelf debootstrap nasm unzip
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-hypothesis
   blender ffmpeg xvfb xauth
   clang-format python3-flake8 mypy

@@ -230,8 +230,7 @@ void BindEstimate(py::module_& m) {
       },
       py::arg("frame"), py::arg("predicted_sun_in_world"),
       "Next frame, searched around the given Sun (the whole-clip path's) "
-      "instead of the "
-      "tracker's own prediction.");
+      "instead of the tracker's own prediction.");
   py::class_<ThesisTracker> thesis_tracker(
       m, "ThesisTracker",
       "The thesis's tracker (five criteria + Algorithm 1), the baseline.");
@@ -269,6 +268,19 @@ void BindEstimate(py::module_& m) {
       .def_readonly("shadow_end_px", &TrackedFrame::shadow_end_px)
       .def_readonly("seconds", &TrackedFrame::seconds);
 
+  py::enum_<FrameStatus>(m, "FrameStatus",
+                         "What became of one frame a VideoReader returned.")
+      .value("ok", FrameStatus::kOk)
+      .value("undecodable", FrameStatus::kUndecodable)
+      .value("size_changed", FrameStatus::kSizeChanged)
+      .value("missing_file", FrameStatus::kMissingFile);
+  py::class_<FrameReport>(m, "FrameReport")
+      .def_readonly("index", &FrameReport::index)
+      .def_readonly("status", &FrameReport::status)
+      .def_readonly("width", &FrameReport::width)
+      .def_readonly("height", &FrameReport::height)
+      .def_readonly("message", &FrameReport::message);
+
   py::class_<VideoReader>(
       m, "VideoReader",
       "Frames of a movie file or a numbered image sequence, streamed.")
@@ -278,6 +290,15 @@ void BindEstimate(py::module_& m) {
       .def_property_readonly("fps", &VideoReader::fps)
       .def_property_readonly("num_frames", &VideoReader::num_frames)
       .def_property_readonly("position", &VideoReader::position)
+      .def_property_readonly("num_frames_exact", &VideoReader::num_frames_exact)
+      .def_property_readonly("is_sequence", &VideoReader::is_sequence)
+      .def_property_readonly(
+          "last_frame", &VideoReader::last_frame,
+          "FrameReport of the last read(): status, index, decoded size.")
+      .def("count_frames", &VideoReader::CountFrames,
+           py::call_guard<py::gil_scoped_release>(),
+           "Counts a movie's frames in the file (no decoding); num_frames is "
+           "exact after.")
       .def(
           "read",
           [](VideoReader& r) -> py::object {
@@ -293,7 +314,10 @@ void BindEstimate(py::module_& m) {
           },
           "Next frame as uint8 (H,W,3) BGR; None for a frame that cannot be "
           "decoded; raises StopIteration at the end.")
-      .def("seek", &VideoReader::Seek, py::arg("index"));
+      .def("seek", &VideoReader::Seek, py::arg("index"),
+           py::call_guard<py::gil_scoped_release>())
+      .def("__iter__", [](py::object self) { return self; })
+      .def("__next__", [](py::object self) { return self.attr("read")(); });
 
   m.def(
       "detect_unmodelled_shadows",

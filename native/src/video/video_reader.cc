@@ -3,25 +3,187 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <regex>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/log.h>
+#include <libswscale/swscale.h>
+}
 
 namespace sunlapse {
 namespace fs = std::filesystem;
 
 namespace {
+
 bool IsImageExtension(std::string ext) {
   for (auto& c : ext) c = static_cast<char>(std::tolower(c));
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" ||
          ext == ".tiff" || ext == ".exr" || ext == ".bmp" || ext == ".webp";
 }
+
+std::string AvError(int err) {
+  char text[AV_ERROR_MAX_STRING_SIZE] = {0};
+  av_strerror(err, text, sizeof(text));
+  return text;
+}
+
+void QuietFfmpeg() {
+  // FFmpeg prints every concealed error to stderr; the reader reports per
+  // frame.
+  static std::once_flag once;
+  std::call_once(once, [] { av_log_set_level(AV_LOG_FATAL); });
+}
+
+// One opened video stream and its decoder (a movie, or one image file).
+class Decoder {
+ public:
+  ~Decoder() {
+    av_frame_free(&frame_);
+    av_packet_free(&packet_);
+    avcodec_free_context(&codec_);
+    avformat_close_input(&format_);
+    sws_freeContext(sws_);
+  }
+
+  // Empty on success, else why the file cannot be read.
+  std::string Open(const std::string& path, bool single_image) {
+    QuietFfmpeg();
+    AVDictionary* options = nullptr;
+    // A single image: never expand '%d' or globs in its name.
+    if (single_image) av_dict_set(&options, "pattern_type", "none", 0);
+    int err = avformat_open_input(&format_, path.c_str(), nullptr, &options);
+    av_dict_free(&options);
+    if (err < 0) return AvError(err);
+    // Images carry their codec in the name or the header; probing decodes.
+    if (!single_image || format_->nb_streams == 0 ||
+        format_->streams[0]->codecpar->codec_id == AV_CODEC_ID_NONE) {
+      if ((err = avformat_find_stream_info(format_, nullptr)) < 0)
+        return AvError(err);
+    }
+    const AVCodec* codec = nullptr;
+    stream_ =
+        av_find_best_stream(format_, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
+    if (stream_ < 0 || codec == nullptr)
+      return "no video stream with a known codec";
+    codec_ = avcodec_alloc_context3(codec);
+    if ((err = avcodec_parameters_to_context(
+             codec_, format_->streams[stream_]->codecpar)) < 0)
+      return AvError(err);
+    codec_->thread_count =
+        single_image ? 1 : 0;  // 0: FFmpeg picks (one per core)
+    if ((err = avcodec_open2(codec_, codec, nullptr)) < 0) return AvError(err);
+    packet_ = av_packet_alloc();
+    frame_ = av_frame_alloc();
+    return {};
+  }
+
+  AVStream* stream() const { return format_->streams[stream_]; }
+  AVFormatContext* format() const { return format_; }
+  const AVFrame* frame() const { return frame_; }
+
+  // Decodes the next frame into frame(): 0, AVERROR_EOF at the end, or another
+  // negative code for a packet the decoder refused (that frame is lost).
+  int Next() {
+    while (true) {
+      int err = avcodec_receive_frame(codec_, frame_);
+      if (err == 0 || err == AVERROR_EOF) return err;
+      if (err != AVERROR(EAGAIN)) return err;
+      if (flushed_) return AVERROR_EOF;
+      err = av_read_frame(format_, packet_);
+      if (err < 0) {  // end of file (or a read error): drain the decoder
+        avcodec_send_packet(codec_, nullptr);
+        flushed_ = true;
+        continue;
+      }
+      if (packet_->stream_index == stream_) {
+        err = avcodec_send_packet(codec_, packet_);
+        av_packet_unref(packet_);
+        if (err < 0 && err != AVERROR(EAGAIN)) return err;
+      } else {
+        av_packet_unref(packet_);
+      }
+    }
+  }
+
+  // Positions the demuxer at or before `timestamp` (stream time base).
+  bool SeekTo(int64_t timestamp) {
+    if (av_seek_frame(format_, stream_, timestamp, AVSEEK_FLAG_BACKWARD) < 0)
+      return false;
+    avcodec_flush_buffers(codec_);
+    flushed_ = false;
+    return true;
+  }
+
+  // frame() as 8-bit BGR. Same conversion as OpenCV's FFmpeg backend (bicubic,
+  // swscale's default colour matrix) so tracks match those read through it.
+  void ToBgr(cv::Mat* bgr) {
+    const AVFrame* f = frame_;
+    sws_ = sws_getCachedContext(sws_, f->width, f->height,
+                                static_cast<AVPixelFormat>(f->format), f->width,
+                                f->height, AV_PIX_FMT_BGR24, SWS_BICUBIC,
+                                nullptr, nullptr, nullptr);
+    if (sws_ == nullptr) {
+      bgr->release();
+      return;
+    }
+    bgr->create(f->height, f->width, CV_8UC3);
+    uint8_t* dst[4] = {bgr->data, nullptr, nullptr, nullptr};
+    int dst_stride[4] = {static_cast<int>(bgr->step[0]), 0, 0, 0};
+    sws_scale(sws_, f->data, f->linesize, 0, f->height, dst, dst_stride);
+  }
+
+ private:
+  AVFormatContext* format_ = nullptr;
+  AVCodecContext* codec_ = nullptr;
+  AVPacket* packet_ = nullptr;
+  AVFrame* frame_ = nullptr;
+  SwsContext* sws_ = nullptr;
+  int stream_ = -1;
+  bool flushed_ = false;
+};
+
+// The first frame of one image file as BGR; the message says why not.
+std::string DecodeImage(const std::string& path, cv::Mat* bgr) {
+  Decoder d;
+  std::string error = d.Open(path, /*single_image=*/true);
+  if (error.empty()) {
+    const int err = d.Next();
+    if (err == 0) {
+      d.ToBgr(bgr);
+      return bgr->empty() ? "unsupported pixel format" : "";
+    }
+    error = err == AVERROR_EOF ? "no image in the file" : AvError(err);
+  }
+  bgr->release();
+  return error;
+}
+
 }  // namespace
 
-VideoReader::VideoReader(const std::string& path) {
+struct VideoReader::Movie {
+  Decoder decoder;
+  int64_t first_pts = 0;  // of frame 0, in the stream's time base
+  bool pending =
+      false;  // decoder.frame() is frame `position_`, not yet returned
+  double frame_seconds = 0.0;
+
+  // 0-based frame index of decoder.frame(), from its time stamp.
+  int64_t IndexOfFrame() const {
+    const int64_t pts = decoder.frame()->best_effort_timestamp;
+    if (pts == AV_NOPTS_VALUE || frame_seconds <= 0.0) return -1;
+    const double seconds =
+        (pts - first_pts) * av_q2d(decoder.stream()->time_base);
+    return std::llround(seconds / frame_seconds);
+  }
+};
+
+VideoReader::VideoReader(const std::string& path) : path_(path) {
   if (!fs::exists(path)) {
     throw std::invalid_argument("path: no such file: " + path);
   }
@@ -32,31 +194,86 @@ VideoReader::VideoReader(const std::string& path) {
   if (IsImageExtension(p.extension().string()) &&
       std::regex_match(name, m, kNumbered)) {
     is_sequence_ = true;
-    prefix_ = (p.parent_path() / m[1].str()).string();
+    const std::string stem = m[1].str();
+    prefix_ = (p.parent_path() / stem).string();
     digits_ = static_cast<int>(m[2].str().size());
     first_number_ = std::stoi(m[2].str());
     suffix_ = m[3].str();
-    while (fs::exists(SequencePath(num_frames_))) ++num_frames_;
-    cv::Mat first = cv::imread(path, cv::IMREAD_COLOR);
-    if (first.empty()) {
-      throw std::invalid_argument("path: cannot decode image " + path);
+    // The sequence runs to the highest number present: a gap is missing
+    // frames, not the end of the clip.
+    int last_number = first_number_;
+    const fs::path dir =
+        p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      const std::string other = entry.path().filename().string();
+      if (other.size() <= stem.size() + suffix_.size() ||
+          other.compare(0, stem.size(), stem) ||
+          other.compare(other.size() - suffix_.size(), suffix_.size(),
+                        suffix_)) {
+        continue;
+      }
+      const std::string digits = other.substr(
+          stem.size(), other.size() - stem.size() - suffix_.size());
+      if (digits.empty() || digits.size() > 9 ||
+          digits.find_first_not_of("0123456789") != std::string::npos) {
+        continue;
+      }
+      // Zero-padded names keep their width; unpadded ones may grow.
+      if (digits_ > 1 && m[2].str()[0] == '0' &&
+          static_cast<int>(digits.size()) != digits_) {
+        continue;
+      }
+      last_number = std::max(last_number, std::stoi(digits));
+    }
+    num_frames_ = last_number - first_number_ + 1;
+    num_frames_exact_ = true;
+    cv::Mat first;
+    const std::string error = DecodeImage(path, &first);
+    if (!error.empty()) {
+      throw std::invalid_argument("path: cannot decode image " + path + " (" +
+                                  error + ")");
     }
     width_ = first.cols;
     height_ = first.rows;
     fps_ = 0.0;
     return;
   }
-  capture_ = std::make_unique<cv::VideoCapture>(path, cv::CAP_FFMPEG);
-  if (!capture_->isOpened()) {
-    throw std::invalid_argument("path: cannot open video " + path);
+  movie_ = std::make_unique<Movie>();
+  const std::string error = movie_->decoder.Open(path, /*single_image=*/false);
+  if (!error.empty()) {
+    throw std::invalid_argument("path: cannot open video " + path + " (" +
+                                error + ")");
   }
-  width_ = static_cast<int>(capture_->get(cv::CAP_PROP_FRAME_WIDTH));
-  height_ = static_cast<int>(capture_->get(cv::CAP_PROP_FRAME_HEIGHT));
-  fps_ = capture_->get(cv::CAP_PROP_FPS);
-  num_frames_ = static_cast<int>(capture_->get(cv::CAP_PROP_FRAME_COUNT));
-  if (width_ <= 0 || height_ <= 0) {
+  AVStream* stream = movie_->decoder.stream();
+  const AVRational rate =
+      av_guess_frame_rate(movie_->decoder.format(), stream, nullptr);
+  fps_ = rate.num > 0 && rate.den > 0 ? av_q2d(rate) : 0.0;
+  movie_->frame_seconds = fps_ > 0.0 ? 1.0 / fps_ : 0.0;
+  if (stream->nb_frames > 0) {
+    num_frames_ = static_cast<int>(stream->nb_frames);
+    num_frames_exact_ = true;
+  } else if (fps_ > 0.0) {
+    double seconds = 0.0;
+    if (stream->duration != AV_NOPTS_VALUE) {
+      seconds = stream->duration * av_q2d(stream->time_base);
+    } else if (movie_->decoder.format()->duration != AV_NOPTS_VALUE) {
+      seconds = movie_->decoder.format()->duration /
+                static_cast<double>(AV_TIME_BASE);
+    }
+    num_frames_ = static_cast<int>(std::llround(seconds * fps_));
+  }
+  // The first decoded frame fixes the size every frame must have.
+  int err;
+  while ((err = movie_->decoder.Next()) < 0 && err != AVERROR_EOF) {
+  }
+  if (err == AVERROR_EOF) {
     throw std::invalid_argument("path: video has no frames: " + path);
   }
+  width_ = movie_->decoder.frame()->width;
+  height_ = movie_->decoder.frame()->height;
+  const int64_t pts = movie_->decoder.frame()->best_effort_timestamp;
+  movie_->first_pts = pts == AV_NOPTS_VALUE ? 0 : pts;
+  movie_->pending = true;
 }
 
 VideoReader::~VideoReader() = default;
@@ -67,42 +284,164 @@ std::string VideoReader::SequencePath(int index) const {
   return prefix_ + number + suffix_;
 }
 
-bool VideoReader::Read(cv::Mat* bgr) {
-  if (is_sequence_) {
-    if (position_ >= num_frames_) return false;
-    *bgr = cv::imread(SequencePath(position_), cv::IMREAD_COLOR);
-    if (!bgr->empty() && (bgr->cols != width_ || bgr->rows != height_)) {
-      bgr->release();  // a frame of another size is as unusable as a corrupt
-                       // one
+int VideoReader::CountFrames() {
+  if (is_sequence_ || num_frames_exact_) return num_frames_;
+  // A second demuxer, so the reading position is untouched.
+  AVFormatContext* format = nullptr;
+  if (avformat_open_input(&format, path_.c_str(), nullptr, nullptr) < 0)
+    return num_frames_;
+  int count = 0;
+  if (avformat_find_stream_info(format, nullptr) >= 0) {
+    const int stream =
+        av_find_best_stream(format, AVMEDIA_TYPE_VIDEO, -1, -1, nullptr, 0);
+    AVPacket* packet = av_packet_alloc();
+    while (stream >= 0 && av_read_frame(format, packet) >= 0) {
+      count += packet->stream_index == stream;
+      av_packet_unref(packet);
     }
-    ++position_;
+    av_packet_free(&packet);
+    num_frames_ = count;
+    num_frames_exact_ = true;
+  }
+  avformat_close_input(&format);
+  return num_frames_;
+}
+
+bool VideoReader::Read(cv::Mat* bgr) {
+  return is_sequence_ ? ReadSequence(bgr) : ReadMovie(bgr);
+}
+
+bool VideoReader::ReadSequence(cv::Mat* bgr) {
+  if (position_ >= num_frames_) return false;
+  last_ = FrameReport{};
+  last_.index = position_;
+  const std::string file = SequencePath(position_++);
+  if (!fs::exists(file)) {
+    bgr->release();
+    last_.status = FrameStatus::kMissingFile;
+    last_.message = "no file " + file;
     return true;
   }
-  if (!capture_->read(*bgr)) {
-    // Containers often over-report their length; the end is where reading
-    // stops.
-    if (num_frames_ <= 0 || position_ >= num_frames_ - 1) return false;
-    bgr->release();
-    ++position_;
-    return position_ < num_frames_;
+  const std::string error = DecodeImage(file, bgr);
+  if (!error.empty()) {
+    last_.status = FrameStatus::kUndecodable;
+    last_.message = "cannot decode " + file + " (" + error + ")";
+    return true;
   }
+  last_.width = bgr->cols;
+  last_.height = bgr->rows;
+  if (bgr->cols != width_ || bgr->rows != height_) {
+    // A frame of another size is as unusable as a corrupt one.
+    bgr->release();
+    last_.status = FrameStatus::kSizeChanged;
+    last_.message = file + " is " + std::to_string(last_.width) + "x" +
+                    std::to_string(last_.height) + ", the clip " +
+                    std::to_string(width_) + "x" + std::to_string(height_);
+  }
+  return true;
+}
+
+bool VideoReader::ReadMovie(cv::Mat* bgr) {
+  Movie& mv = *movie_;
+  last_ = FrameReport{};
+  last_.index = position_;
+  if (!mv.pending) {
+    const int err = mv.decoder.Next();
+    if (err == AVERROR_EOF) {
+      // Containers often over-report their length; the end is where reading
+      // stops.
+      last_.index = -1;
+      return false;
+    }
+    if (err < 0) {
+      bgr->release();
+      ++position_;
+      last_.status = FrameStatus::kUndecodable;
+      last_.message = "frame " + std::to_string(last_.index) +
+                      " cannot be decoded (" + AvError(err) + ")";
+      return true;
+    }
+  }
+  mv.pending = false;
   ++position_;
+  const AVFrame* f = mv.decoder.frame();
+  last_.width = f->width;
+  last_.height = f->height;
+  if (f->width != width_ || f->height != height_) {
+    // Converting at the first frame's size would garble it: report, skip.
+    bgr->release();
+    last_.status = FrameStatus::kSizeChanged;
+    last_.message = "frame " + std::to_string(last_.index) + " is " +
+                    std::to_string(f->width) + "x" + std::to_string(f->height) +
+                    ", the clip " + std::to_string(width_) + "x" +
+                    std::to_string(height_);
+    return true;
+  }
+  mv.decoder.ToBgr(bgr);
+  if (bgr->empty()) {
+    last_.status = FrameStatus::kUndecodable;
+    last_.message = "frame " + std::to_string(last_.index) +
+                    " has an unsupported pixel format";
+  }
   return true;
 }
 
 bool VideoReader::Seek(int index) {
   if (index < 0 || (num_frames_ > 0 && index >= num_frames_)) return false;
-  if (!is_sequence_) {
-    if (index < position_ || index > position_ + 50) {
-      capture_->set(cv::CAP_PROP_POS_FRAMES, index);
-      position_ = static_cast<int>(capture_->get(cv::CAP_PROP_POS_FRAMES));
-    }
-    cv::Mat skip;
-    while (position_ < index && capture_->grab())
-      ++position_;  // exact, decodes
-    if (position_ != index) return false;
+  if (is_sequence_) {
+    position_ = index;
+    return true;
   }
-  position_ = index;
+  Movie& mv = *movie_;
+  if (index == position_) return true;
+  // Close ahead: decoding forward is exact and cheaper than a seek.
+  if (index > position_ && index <= position_ + 50) {
+    while (position_ < index) {
+      if (!mv.pending) {
+        const int err = mv.decoder.Next();
+        if (err == AVERROR_EOF) return false;
+      }
+      mv.pending = false;
+      ++position_;
+    }
+    return true;
+  }
+  // To the key frame at or before the target, then decode up to it; the
+  // frames' time stamps say where we are.
+  const AVStream* st = mv.decoder.stream();
+  const int64_t target =
+      mv.first_pts + static_cast<int64_t>(std::llround(
+                         index * mv.frame_seconds / av_q2d(st->time_base)));
+  mv.pending = false;
+  if (mv.decoder.SeekTo(target)) {
+    int64_t at = -1;
+    while (true) {
+      const int err = mv.decoder.Next();
+      if (err == AVERROR_EOF) break;
+      if (err < 0) continue;
+      at = mv.IndexOfFrame();
+      if (at < 0 || at >= index) break;
+    }
+    if (at == index) {
+      mv.pending = true;
+      position_ = index;
+      return true;
+    }
+  }
+  // The seek landed past the target, or the frames carry no time stamps:
+  // from the very beginning, counting frames as Read() does.
+  if (!mv.decoder.SeekTo(mv.first_pts)) return false;
+  int err;
+  while ((err = mv.decoder.Next()) < 0 && err != AVERROR_EOF) {
+  }
+  if (err == AVERROR_EOF) return false;
+  mv.pending = true;
+  position_ = 0;
+  while (position_ < index) {
+    if (!mv.pending && mv.decoder.Next() == AVERROR_EOF) return false;
+    mv.pending = false;
+    ++position_;
+  }
   return true;
 }
 

@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -82,6 +84,131 @@ TEST(VideoReader, ReadsAMovieFile) {
   int n = 0;
   while (r.Read(&f)) n += !f.empty();
   EXPECT_EQ(n, 5);
+}
+
+TEST(VideoReader, AGapInASequenceIsReportedAndReadingGoesOn) {
+  const fs::path d = TempDir("gap");
+  for (int i : {1, 2, 4, 5}) {
+    cv::imwrite((d / ("f_" + std::to_string(i) + ".png")).string(), Frame(i));
+  }
+  VideoReader r((d / "f_1.png").string());
+  EXPECT_EQ(r.num_frames(), 5);  // the gap counts: frame numbers stay aligned
+  cv::Mat f;
+  std::vector<FrameStatus> statuses;
+  std::vector<int> blues;
+  while (r.Read(&f)) {
+    statuses.push_back(r.last_frame().status);
+    blues.push_back(f.empty() ? -1 : f.at<cv::Vec3b>(0, 0)[0]);
+  }
+  ASSERT_EQ(statuses.size(), 5u);
+  EXPECT_EQ(statuses[2], FrameStatus::kMissingFile);
+  EXPECT_EQ(statuses[4], FrameStatus::kOk);
+  EXPECT_EQ(blues, (std::vector<int>{10, 20, -1, 40, 50}));
+}
+
+TEST(VideoReader, AFrameOfAnotherSizeIsReportedAndReadingGoesOn) {
+  const fs::path d = TempDir("size");
+  cv::imwrite((d / "f_01.png").string(), Frame(1));
+  cv::imwrite((d / "f_02.png").string(),
+              cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
+  cv::imwrite((d / "f_03.png").string(), Frame(3));
+  VideoReader r((d / "f_01.png").string());
+  cv::Mat f;
+  ASSERT_TRUE(r.Read(&f) && r.Read(&f));
+  EXPECT_TRUE(f.empty());
+  EXPECT_EQ(r.last_frame().status, FrameStatus::kSizeChanged);
+  EXPECT_EQ(r.last_frame().width, 64);
+  EXPECT_EQ(r.last_frame().index, 1);
+  ASSERT_TRUE(r.Read(&f));
+  EXPECT_EQ(r.last_frame().status, FrameStatus::kOk);
+  EXPECT_EQ(f.at<cv::Vec3b>(0, 0)[0], 30);
+  EXPECT_FALSE(r.Read(&f));
+}
+
+// A movie whose frames' colour encodes their index, written by OpenCV.
+std::string NumberedMovie(const fs::path& d, int n) {
+  const std::string path = (d / "numbered.avi").string();
+  cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                    cv::Size(32, 24));
+  for (int i = 0; i < n; ++i) {
+    w.write(cv::Mat(24, 32, CV_8UC3, cv::Scalar(2 * i, 100, 50)));
+  }
+  return path;
+}
+
+TEST(VideoReader, SeeksFarForwardAndBackToTheExactFrame) {
+  const fs::path d = TempDir("seek");
+  VideoReader r(NumberedMovie(d, 120));
+  EXPECT_EQ(r.num_frames(), 120);
+  cv::Mat f;
+  for (int target : {100, 10, 60, 61, 119, 0}) {
+    ASSERT_TRUE(r.Seek(target)) << target;
+    ASSERT_TRUE(r.Read(&f)) << target;
+    ASSERT_FALSE(f.empty());
+    EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * target, 3) << target;
+    EXPECT_EQ(r.last_frame().index, target);
+  }
+  EXPECT_FALSE(r.Seek(120));
+  EXPECT_EQ(r.CountFrames(), 120);
+}
+
+// Runs the ffmpeg command line; false when it is missing or fails.
+bool Ffmpeg(const std::string& args) {
+  return std::system(
+             ("ffmpeg -v error -y " + args + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+TEST(VideoReader, AResolutionChangeMidStreamIsReportedPerFrame) {
+  const fs::path d = TempDir("res");
+  const std::string a = (d / "a.ts").string(), b = (d / "b.ts").string();
+  if (!Ffmpeg("-f lavfi -i color=c=red:s=64x48:r=10:d=0.5 -c:v mpeg2video " +
+              a) ||
+      !Ffmpeg("-f lavfi -i color=c=blue:s=80x64:r=10:d=0.5 -c:v mpeg2video " +
+              b)) {
+    GTEST_SKIP() << "no ffmpeg command to make the clip";
+  }
+  // MPEG-TS streams concatenate byte for byte; the decoder changes size.
+  const std::string joined = (d / "joined.ts").string();
+  {
+    std::ofstream out(joined, std::ios::binary);
+    out << std::ifstream(a, std::ios::binary).rdbuf()
+        << std::ifstream(b, std::ios::binary).rdbuf();
+  }
+  VideoReader r(joined);
+  EXPECT_EQ(r.width(), 64);
+  cv::Mat f;
+  int ok = 0, changed = 0;
+  while (r.Read(&f)) {
+    if (r.last_frame().status == FrameStatus::kOk) {
+      ++ok;
+      EXPECT_EQ(f.cols, 64);
+    } else if (r.last_frame().status == FrameStatus::kSizeChanged) {
+      ++changed;
+      EXPECT_TRUE(f.empty());
+      EXPECT_EQ(r.last_frame().width, 80);
+    }
+  }
+  // 5 + 5 frames; the decoder may drop one where the two streams meet.
+  EXPECT_GE(ok, 4);
+  EXPECT_GE(changed, 4);
+  EXPECT_GE(ok + changed, 9);
+  EXPECT_LE(ok + changed, 10);
+}
+
+TEST(VideoReader, CountsTheFramesOfAMovieWithoutACountInItsHeader) {
+  const fs::path d = TempDir("count");
+  const std::string path = (d / "clip.mkv").string();
+  if (!Ffmpeg("-f lavfi -i testsrc=s=32x24:r=10:d=1.3 -c:v mjpeg " + path)) {
+    GTEST_SKIP() << "no ffmpeg command to make the clip";
+  }
+  VideoReader r(path);
+  EXPECT_FALSE(r.num_frames_exact());
+  EXPECT_EQ(r.CountFrames(), 13);
+  EXPECT_TRUE(r.num_frames_exact());
+  cv::Mat f;
+  int n = 0;
+  while (r.Read(&f)) n += !f.empty();
+  EXPECT_EQ(n, 13);
 }
 
 TEST(VideoReader, MissingOrUndecodableFilesThrow) {

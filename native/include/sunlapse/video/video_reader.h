@@ -1,5 +1,7 @@
 // Frames from a movie file or a numbered image sequence, streamed one by one
-// (memory does not grow with the clip's length).
+// (memory does not grow with the clip's length). Decoding goes through
+// FFmpeg's libavformat/libavcodec/libswscale directly, so the module does not
+// drag in OpenCV's imgcodecs/videoio (GDAL, GStreamer, camera drivers ...).
 #pragma once
 
 #include <memory>
@@ -7,11 +9,23 @@
 
 #include <opencv2/core.hpp>
 
-namespace cv {
-class VideoCapture;
-}  // namespace cv
-
 namespace sunlapse {
+
+// What became of one frame that Read() returned.
+enum class FrameStatus {
+  kOk = 0,
+  kUndecodable,  // the file or packet is corrupt; the frame comes back empty
+  kSizeChanged,  // decoded at another size than the first frame; comes back
+                 // empty
+  kMissingFile,  // a sequence has no file for this number; comes back empty
+};
+
+struct FrameReport {
+  int index = -1;  // 0-based frame index
+  FrameStatus status = FrameStatus::kOk;
+  int width = 0, height = 0;  // as decoded (0 when nothing could be decoded)
+  std::string message;        // empty for kOk
+};
 
 class VideoReader {
  public:
@@ -20,32 +34,52 @@ class VideoReader {
   // std::invalid_argument when the file is missing or cannot be decoded.
   explicit VideoReader(const std::string& path);
   ~VideoReader();
+  VideoReader(const VideoReader&) = delete;
+  VideoReader& operator=(const VideoReader&) = delete;
 
+  // Size of the first frame, in pixels; every frame must have it.
   int width() const { return width_; }
   int height() const { return height_; }
   double fps() const { return fps_; }
-  // Number of frames (as the container reports it for movies).
+  // Number of frames. Sequences: from the first file's number to the highest
+  // number present (gaps included, they read as kMissingFile). Movies: the
+  // container's count, or duration x rate when it has none (then
+  // num_frames_exact() is false until CountFrames()).
   int num_frames() const { return num_frames_; }
+  bool num_frames_exact() const { return num_frames_exact_; }
+  // Movies: counts the video packets of the whole file (no decoding) and
+  // makes num_frames() exact. Sequences: num_frames(). Does not move the
+  // reader.
+  int CountFrames();
   // 0-based index of the frame the next Read() returns.
   int position() const { return position_; }
   bool is_sequence() const { return is_sequence_; }
 
-  // Reads the next frame as 8-bit BGR. Returns false at the end; a frame that
-  // cannot be decoded comes back as an empty Mat with true (the caller
-  // decides how to treat a corrupt frame) and reading goes on.
+  // Reads the next frame as 8-bit BGR. Returns false at the end. A frame that
+  // cannot be used (corrupt, another size than the first, a file missing from
+  // a sequence) comes back as an empty Mat with true, last_frame() says why,
+  // and reading goes on.
   bool Read(cv::Mat* bgr);
+  // What the last Read() returned.
+  const FrameReport& last_frame() const { return last_; }
   // Moves to 0-based frame `index`; false if out of range.
   bool Seek(int index);
 
  private:
+  struct Movie;
   std::string SequencePath(int index) const;
+  bool ReadSequence(cv::Mat* bgr);
+  bool ReadMovie(cv::Mat* bgr);
 
-  std::unique_ptr<cv::VideoCapture> capture_;
+  std::unique_ptr<Movie> movie_;
+  std::string path_;
   bool is_sequence_ = false;
   std::string prefix_, suffix_;
   int digits_ = 0, first_number_ = 0;
   int width_ = 0, height_ = 0, num_frames_ = 0, position_ = 0;
+  bool num_frames_exact_ = false;
   double fps_ = 0.0;
+  FrameReport last_;
 };
 
 // 8-bit BGR (or gray) -> single-channel float32 in [0, 1], with the display
