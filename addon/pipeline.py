@@ -98,6 +98,12 @@ class _FrameSource:
         self.reader, self.start, self.next = reader, clip_frame_start, next_index
         self.end = None  # first 0-based index past the clip's end, once known
 
+    def why_not(self) -> str:
+        """Why the last read() gave no frame (the reader's own report)."""
+        report = getattr(self.reader, "last_frame", None)
+        message = getattr(report, "message", "") if report is not None else ""
+        return message or "frame not decodable"
+
     def read(self, frame: int):
         """uint8 BGR, or None when the frame cannot be decoded; raises
         StopIteration when the clip has no such frame."""
@@ -372,11 +378,20 @@ def _run_tracked(scene, camera, source, frames, visit, times, options, track, pr
         except StopIteration:
             raws.append((f, None, None, 0.0, "the clip ended before this frame", None))
             continue
+        why = None
+        if bgr is None:
+            why = source.why_not()
+        elif bgr.shape[0] != camera.height or bgr.shape[1] != camera.width:
+            why = (f"frame is {bgr.shape[1]}x{bgr.shape[0]}, not the camera's "
+                   f"{camera.width}x{camera.height}: not the scene's footage")
+            bgr = None
         if bgr is not None and f in sample_at:
             samples[f] = bgr
         r = tracker.track(None if bgr is None else _gray(bgr, camera, options.method))
         track_seconds += r.seconds
-        if r.ok:
+        if why is not None:
+            raws.append((f, None, None, 0.0, why, None))
+        elif r.ok:
             raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
         else:
             raws.append((f, None, None, 0.0, r.reason, r))
@@ -468,9 +483,12 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
         try:
             bgr = source.read(f)
         except StopIteration:
-            return None
-        if bgr is None or bgr.shape[0] != camera.height or bgr.shape[1] != camera.width:
-            return None
+            return "the clip ended before this frame"
+        if bgr is None:
+            return source.why_not()
+        if bgr.shape[0] != camera.height or bgr.shape[1] != camera.width:
+            return (f"frame is {bgr.shape[1]}x{bgr.shape[0]}, not the camera's "
+                    f"{camera.width}x{camera.height}: not the scene's footage")
         if f in sample_at:
             samples[f] = bgr
         return native.to_linear_gray(bgr, GAMMA[options.method])

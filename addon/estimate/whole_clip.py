@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, List, Optional, Sequence
+from typing import Callable, List, Optional, Sequence, Union
 
 import numpy as np
 
@@ -103,14 +103,19 @@ def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
 
 
+def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
+    return read if isinstance(read, np.ndarray) else None
+
+
 def estimate(native, scene, camera, frames: Sequence[int],
-             read_gray: Callable[[int], Optional[np.ndarray]],
+             read_gray: Callable[[int], Union[np.ndarray, str, None]],
              ground_object_ids: Sequence[int], times_s: Optional[Sequence[float]] = None,
              ignore_top_rows: int = 0,
              progress: Optional[Callable[[float], object]] = None) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
-    the frame as float32 linear gray of the camera's size, or None when it
-    cannot be decoded or is not the camera's size. `times_s`: capture times
+    the frame as float32 linear gray of the camera's size, or None or a
+    sentence saying why there is none (not decodable, another size, a file
+    missing from a sequence). `times_s`: capture times
     in seconds (None when unknown). `native`: the compiled module (passed in,
     so this controller imports nothing of the add-on's package)."""
     frames = list(frames)
@@ -126,7 +131,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     opts.ignore_top_rows = ignore_top_rows
     sky = native.SkyEvidence(scene, camera, opts)
     t_table = time.perf_counter() - t0
-    reference = [read_gray(frames[i]) for i in spread(n)]
+    reference = [_frame(read_gray(frames[i])) for i in spread(n)]
     used = sky.set_reference(reference)
     del reference
     t_setup = time.perf_counter() - t0
@@ -140,9 +145,10 @@ def estimate(native, scene, camera, frames: Sequence[int],
     ok = native.FrameEvidenceStatus.OK
     for k, f in enumerate(frames):
         tick(0.5 * k / n)
-        e = sky.add_frame(read_gray(f))
+        got = read_gray(f)
+        e = sky.add_frame(_frame(got))
         status.append(e.status)
-        reasons.append(e.message or None)
+        reasons.append(got if isinstance(got, str) else (e.message or None))
     t_evidence = time.perf_counter() - t0
 
     # Segments the caller knows of: capture times going back.
@@ -203,7 +209,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
                 raw.reason = "no shadow evidence on this frame or around it in its segment"
                 continue
             d = directions[path["direction"][k]]
-            gray = read_gray(f) if (measured[k] or initialized) else None
+            gray = _frame(read_gray(f)) if (measured[k] or initialized) else None
             refined = None
             if gray is not None and measured[k] and not initialized:
                 init = tracker.initialize(gray, d)
