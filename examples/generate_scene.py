@@ -3,6 +3,16 @@
   blender -b --factory-startup --python examples/generate_scene.py -- \
       --preset plaza --out DIR [--tiny] [--frames N] [--resolution WxH] [--samples S]
       [--minutes-per-frame M]
+  blender -b --factory-startup --python examples/generate_scene.py -- \
+      --random KEY --out DIR [--tiny] [--frames N] [--resolution WxH] [--samples S]
+      [--spec-only]
+
+--random builds a scene of the randomised suite (bench/suite.py): KEY is an
+integer seed or a fixed member (the plaza of issue 14); examples/random_scene.py
+draws it (place, date, hours, north offset, camera, casters, ground, clutter,
+clouds, exposure drift, shake, noise, compression, or a room lit through a
+window) and it is written to DIR/spec.json too. Its defaults are the suite's:
+32 frames at 320x180.
 
 Writes into DIR:
   clip.mp4          the footage (Cycles, few samples, no denoising, H.264)
@@ -13,6 +23,11 @@ Writes into DIR:
   masks/mask_NNNN.png   ground-truth cast-shadow masks on the ground for a few
                     frames (255 = ground in shadow, 0 = elsewhere)
   render.blend      the full render scene, for inspection and truth checks
+
+For random scenes the footage also has what the user's scene does not: the
+camera shakes, the exposure drifts and clouds dim the Sun (all keyframed in
+render.blend, none in scene.blend, where the camera is at rest), and the
+truth's extra.random_scene holds the spec.
 
 The Sun is a Sun lamp of the real angular size (0.545 deg) whose direction on
 every frame comes from the ephemeris (_native.sun_position) at the preset's
