@@ -95,6 +95,11 @@ def nice_blender(*args):
     return ["nice", "-n", "10", "blender", "-b", "--factory-startup", *args]
 
 
+# Debian's Blender finds its Python through the python3 on PATH: a pyenv or
+# venv python3 first on PATH hides numpy from it. The system one goes first.
+BLENDER_ENV = dict(os.environ, PATH="/usr/bin:" + os.environ.get("PATH", ""))
+
+
 def render(key, spec, cache, log_dir):
     """Renders one scene unless its cache folder already holds it. Returns
     (key, folder, seconds or None when reused, error or None)."""
@@ -112,7 +117,7 @@ def render(key, spec, cache, log_dir):
             "--python-exit-code", "1", "--python",
             os.path.join(ROOT, "examples", "generate_scene.py"), "--",
             "--random", key, "--out", folder, "--mask-frames", "1"),
-            stdout=fh, stderr=subprocess.STDOUT).returncode
+            stdout=fh, stderr=subprocess.STDOUT, env=BLENDER_ENV).returncode
     if rc != 0:
         return key, folder, None, f"rendering failed (see {log})"
     # The frames are in the clip; keep the cache small.
@@ -143,7 +148,7 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir):
         rc = subprocess.run(nice_blender(
             os.path.join(folder, "scene.blend"), "--python-exit-code", "1", "--python",
             os.path.join(ROOT, "examples", "run_estimate.py"), "--", *args),
-            stdout=fh, stderr=subprocess.STDOUT).returncode
+            stdout=fh, stderr=subprocess.STDOUT, env=BLENDER_ENV).returncode
     wall = time.perf_counter() - t0
     error = None
     if rc != 0:
