@@ -3,6 +3,16 @@
   blender -b --factory-startup --python examples/generate_scene.py -- \
       --preset plaza --out DIR [--tiny] [--frames N] [--resolution WxH] [--samples S]
       [--minutes-per-frame M]
+  blender -b --factory-startup --python examples/generate_scene.py -- \
+      --random KEY --out DIR [--tiny] [--frames N] [--resolution WxH] [--samples S]
+      [--spec-only]
+
+--random builds a scene of the randomised suite (bench/suite.py): KEY is an
+integer seed or a fixed member (the plaza of issue 14); examples/random_scene.py
+draws it (place, date, hours, north offset, camera, casters, ground, clutter,
+clouds, exposure drift, shake, noise, compression, or a room lit through a
+window) and it is written to DIR/spec.json too. Its defaults are the suite's:
+32 frames at 320x180.
 
 Writes into DIR:
   clip.mp4          the footage (Cycles, few samples, no denoising, H.264)
@@ -13,6 +23,11 @@ Writes into DIR:
   masks/mask_NNNN.png   ground-truth cast-shadow masks on the ground for a few
                     frames (255 = ground in shadow, 0 = elsewhere)
   render.blend      the full render scene, for inspection and truth checks
+
+For random scenes the footage also has what the user's scene does not: the
+camera shakes, the exposure drifts and clouds dim the Sun (all keyframed in
+render.blend, none in scene.blend, where the camera is at rest), and the
+truth's extra.random_scene holds the spec.
 
 The Sun is a Sun lamp of the real angular size (0.545 deg) whose direction on
 every frame comes from the ephemeris (_native.sun_position) at the preset's
@@ -33,6 +48,7 @@ from mathutils import Vector
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import random_scene  # noqa: E402
 import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
@@ -95,11 +111,14 @@ def _principled(name, color, roughness=0.8):
     return mat
 
 
-def ground_material(kind):
-    """Procedural ground textures that look like real surfaces."""
-    mat = _principled(f"ground_{kind}", (0.3, 0.3, 0.3), roughness=0.9)
+def ground_material(kind, roughness=0.9, specular=0.2):
+    """Procedural ground textures that look like real surfaces. A rough
+    Principled BSDF is brighter at grazing views (far from the camera), as
+    real ground is; a Lambertian ground would be flat."""
+    mat = _principled(f"ground_{kind}", (0.3, 0.3, 0.3), roughness=roughness)
     nt = mat.node_tree
     bsdf = nt.nodes["Principled BSDF"]
+    bsdf.inputs["Specular"].default_value = specular
     coord = nt.nodes.new("ShaderNodeTexCoord")
     noise = nt.nodes.new("ShaderNodeTexNoise")
     noise.inputs["Scale"].default_value = 3.0
@@ -318,11 +337,91 @@ def sun_at(native, when, preset):
                                u.second + u.microsecond * 1e-6, preset["lat"], preset["lon"])
 
 
+def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=True):
+    """A Sun lamp of the real angular size and a Nishita sky that follows it,
+    keyframed on every frame. `strength_factors` dims the lamp per frame
+    (clouds). Without `sky_importance` Cycles builds no importance map of the
+    world: the sky (no Sun disc) is smooth, and rebuilding the map on every
+    frame costs ~8x the render of a small frame (measured 10.2 vs 1.3 s)."""
+    lamp_data = bpy.data.lights.new("Sun", "SUN")
+    lamp_data.angle = math.radians(SUN_ANGULAR_DIAMETER_DEG)
+    lamp_data.energy = SUN_STRENGTH
+    lamp = bpy.data.objects.new("Sun", lamp_data)
+    scene.collection.objects.link(lamp)
+    lamp.rotation_mode = "XYZ"
+
+    world = bpy.data.worlds.new("Sky")
+    scene.world = world
+    world.use_nodes = True
+    if not sky_importance:
+        world.cycles.sampling_method = "NONE"
+    sky = world.node_tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "NISHITA"
+    sky.sun_disc = False  # the lamp is the Sun; the sky only adds skylight
+    bg = world.node_tree.nodes["Background"]
+    bg.inputs["Strength"].default_value = 0.12
+    world.node_tree.links.new(sky.outputs["Color"], bg.inputs["Color"])
+
+    for i, (z, a) in enumerate(suns):
+        f = i + 1
+        lamp.rotation_euler = lamp_euler(z, a + north)
+        lamp.keyframe_insert("rotation_euler", frame=f)
+        if strength_factors is not None:
+            lamp_data.energy = SUN_STRENGTH * strength_factors[i]
+            lamp_data.keyframe_insert("energy", frame=f)
+        sky.sun_elevation, sky.sun_rotation = sky_angles(z, a + north)
+        sky.keyframe_insert("sun_elevation", frame=f)
+        sky.keyframe_insert("sun_rotation", frame=f)
+    curves = list(lamp.animation_data.action.fcurves) + \
+        list(world.node_tree.animation_data.action.fcurves)
+    if lamp_data.animation_data:
+        curves += list(lamp_data.animation_data.action.fcurves)
+    for fc in curves:
+        for kp in fc.keyframe_points:
+            kp.interpolation = "LINEAR"
+    return lamp
+
+
+def configure_render(scene, samples, exposure, frames, frames_dir):
+    scene.frame_start, scene.frame_end = 1, frames
+    r = scene.render
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False
+    scene.cycles.use_adaptive_sampling = False
+    scene.cycles.max_bounces = 4
+    scene.cycles.seed = 0
+    scene.cycles.use_animated_seed = True  # noise changes frame to frame, like a sensor
+    scene.view_settings.view_transform = "Filmic"
+    scene.view_settings.look = "Medium Contrast"
+    scene.view_settings.exposure = exposure
+    r.image_settings.file_format = "PNG"
+    r.image_settings.color_mode = "RGB"
+    r.fps = 25
+    r.filepath = os.path.join(frames_dir, "frame_")
+
+
+def encode_clip(frames_dir, clip_path, crf=20, noise=0):
+    """H.264 like a camera's; `noise` adds temporal grain (ffmpeg's noise
+    filter strength, 0-100) before compression, like a sensor's."""
+    vf = ["-vf", f"noise=alls={noise}:allf=t"] if noise else []
+    subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-framerate", "25",
+                    "-i", os.path.join(frames_dir, "frame_%04d.png"), *vf, "-c:v", "libx264",
+                    "-preset", "medium", "-crf", str(crf), "-pix_fmt", "yuv420p", clip_path],
+                   check=True)
+
+
 # ---------------------------------------------------------------------------
 
 def parse_args(argv):
     p = argparse.ArgumentParser(prog="generate_scene.py")
-    p.add_argument("--preset", required=True, choices=sorted(PRESETS))
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--preset", choices=sorted(PRESETS))
+    which.add_argument("--random", metavar="KEY",
+                       help="a random scene of the suite (examples/random_scene.py): an "
+                            "integer seed, or a fixed member: "
+                            + ", ".join(sorted(random_scene.FIXED)))
     p.add_argument("--out", required=True)
     p.add_argument("--tiny", action="store_true",
                    help="test size: 3 frames, 128x96, 4 samples")
@@ -333,12 +432,29 @@ def parse_args(argv):
                    help="time between frames (default: the preset's)")
     p.add_argument("--mask-frames", type=int, default=3,
                    help="how many frames get a ground-truth shadow mask")
-    return p.parse_args(argv)
+    p.add_argument("--spec-only", action="store_true",
+                   help="with --random: write spec.json (what would be rendered) and stop")
+    args = p.parse_args(argv)
+    if args.random is None and args.spec_only:
+        p.error("--spec-only needs --random")
+    if args.resolution:
+        try:
+            w, h = (int(v) for v in args.resolution.lower().split("x"))
+            assert w > 0 and h > 0
+        except (ValueError, AssertionError):
+            p.error(f"--resolution must be WxH in pixels (e.g. 320x180), got '{args.resolution}'")
+    for flag in ("frames", "samples"):
+        v = getattr(args, flag)
+        if v is not None and v < (2 if flag == "frames" and args.random is not None else 1):
+            p.error(f"--{flag} must be a positive integer, got {v}")
+    return args
 
 
 def main(argv):
     args = parse_args(argv)
     native = native_loader.require()
+    if args.random is not None:
+        return main_random(args, native)
     preset = dict(PRESETS[args.preset])
     if args.minutes_per_frame:
         preset["minutes_per_frame"] = args.minutes_per_frame
@@ -375,60 +491,13 @@ def main(argv):
         place_room_walls(model, bpy.data.materials["concrete"], mid_az_world)
     cam_obj = setup_camera(scene, preset["camera"], preset["layout"], width, height, mid_az_world)
 
-    # Sun lamp of the real angular size, keyframed on every frame.
-    lamp_data = bpy.data.lights.new("Sun", "SUN")
-    lamp_data.angle = math.radians(SUN_ANGULAR_DIAMETER_DEG)
-    lamp_data.energy = SUN_STRENGTH
-    lamp = bpy.data.objects.new("Sun", lamp_data)
-    scene.collection.objects.link(lamp)
-    lamp.rotation_mode = "XYZ"
-
-    world = bpy.data.worlds.new("Sky")
-    scene.world = world
-    world.use_nodes = True
-    sky = world.node_tree.nodes.new("ShaderNodeTexSky")
-    sky.sky_type = "NISHITA"
-    sky.sun_disc = False  # the lamp is the Sun; the sky only adds skylight
-    bg = world.node_tree.nodes["Background"]
-    bg.inputs["Strength"].default_value = 0.12
-    world.node_tree.links.new(sky.outputs["Color"], bg.inputs["Color"])
-
-    scene.frame_start, scene.frame_end = 1, frames
-    for i, (z, a) in enumerate(suns):
-        f = i + 1
-        lamp.rotation_euler = lamp_euler(z, a + north)
-        lamp.keyframe_insert("rotation_euler", frame=f)
-        sky.sun_elevation, sky.sun_rotation = sky_angles(z, a + north)
-        sky.keyframe_insert("sun_elevation", frame=f)
-        sky.keyframe_insert("sun_rotation", frame=f)
-    for fc in list(lamp.animation_data.action.fcurves) + list(world.node_tree.animation_data.action.fcurves):
-        for kp in fc.keyframe_points:
-            kp.interpolation = "LINEAR"
-
-    r = scene.render
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = False
-    scene.cycles.use_adaptive_sampling = False
-    scene.cycles.max_bounces = 4
-    scene.cycles.seed = 0
-    scene.cycles.use_animated_seed = True  # noise changes frame to frame, like a sensor
-    scene.view_settings.view_transform = "Filmic"
-    scene.view_settings.look = "Medium Contrast"
-    scene.view_settings.exposure = preset.get("exposure", 0.0)
-    r.image_settings.file_format = "PNG"
-    r.image_settings.color_mode = "RGB"
-    r.fps = 25
-    r.filepath = os.path.join(frames_dir, "frame_")
+    lamp = add_sun_and_sky(scene, suns, north)
+    configure_render(scene, samples, preset.get("exposure", 0.0), frames, frames_dir)
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "render.blend"))
     bpy.ops.render.render(animation=True)
 
     clip_path = os.path.join(out, "clip.mp4")
-    subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-framerate", "25",
-                    "-i", os.path.join(frames_dir, "frame_%04d.png"), "-c:v", "libx264",
-                    "-preset", "medium", "-crf", "20", "-pix_fmt", "yuv420p", clip_path],
-                   check=True)
+    encode_clip(frames_dir, clip_path)
 
     mask_frames = sorted({1 + round(k * (frames - 1) / max(1, args.mask_frames - 1))
                           for k in range(args.mask_frames)})
@@ -455,8 +524,231 @@ def main(argv):
     save_user_blend(scene, out, clip_path, lamp, extras)
     print(f"generate_scene: {args.preset}: {frames} frames {width}x{height} -> {out}")
 
+# ---------------------------------------------------------------------------
+# Random scenes (the scene suite): examples/random_scene.py draws, this builds.
 
-def render_masks(scene, ground, suns, north, mask_frames, masks_dir):
+def _link_only(ob, collection):
+    for c in ob.users_collection:
+        c.objects.unlink(ob)
+    collection.objects.link(ob)
+
+
+def _cylinder(name, radius, height, location, collection, material, vertices=24):
+    bpy.ops.mesh.primitive_cylinder_add(radius=radius, depth=height, vertices=vertices,
+                                        location=(location[0], location[1], height / 2.0))
+    ob = bpy.context.active_object
+    ob.name = name
+    _link_only(ob, collection)
+    ob.data.materials.append(material)
+    return ob
+
+
+def _rotated(location, rotation_z_deg, du, dv):
+    """location + (du, dv) turned by rotation_z_deg (counter-clockwise, as
+    Blender's Z rotation)."""
+    a = math.radians(rotation_z_deg)
+    return (location[0] + du * math.cos(a) - dv * math.sin(a),
+            location[1] + du * math.sin(a) + dv * math.cos(a), location[2])
+
+
+def build_item(item, collection, mats):
+    """One caster or clutter object of a random scene (see random_scene.py)."""
+    shape, name, size = item["shape"], item["name"], item["size"]
+    loc, rot = item["location"], item["rotation_z_deg"]
+    if shape == "pole":
+        if item.get("round"):
+            return [_cylinder(name, size[0] / 2, size[2], loc, collection, mats["dark"], 12)]
+        return [_box(name, size, loc, rot, collection, mats["dark"])]
+    if shape in ("box", "wall", "bench", "car"):
+        mat = {"box": mats["grey"], "wall": mats["grey"], "bench": mats["wood"],
+               "car": mats["car"]}[shape]
+        return [_box(name, size, loc, rot, collection, mat)]
+    if shape == "kiosk":
+        roof_t, o = 0.15, item["roof_overhang"]
+        body = _box(name, (size[0], size[1], size[2] - roof_t), loc, rot, collection, mats["grey"])
+        roof = _box(name + "_roof", (size[0] + 2 * o, size[1] + 2 * o, roof_t),
+                    (loc[0], loc[1], size[2] - roof_t), rot, collection, mats["dark"])
+        return [body, roof]
+    if shape == "lshape":
+        t = item["thickness"]
+        a = _box(name + "_a", (size[0], t, size[2]), _rotated(loc, rot, size[0] / 2, t / 2),
+                 rot, collection, mats["grey"])
+        b = _box(name + "_b", (t, size[1], size[2]), _rotated(loc, rot, t / 2, size[1] / 2),
+                 rot, collection, mats["grey"])
+        return [a, b]
+    if shape == "cylinder":
+        return [_cylinder(name, size[0], size[2], loc, collection, mats["grey"])]
+    if shape == "bin":
+        return [_cylinder(name, size[0], size[2], loc, collection, mats["green"])]
+    if shape == "person":
+        return [_cylinder(name, size[0], size[2], loc, collection, mats["cloth"], 12)]
+    if shape == "bush":
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=size[0],
+                                             location=(loc[0], loc[1], 0.8 * size[0]))
+        ob = bpy.context.active_object
+        ob.name = name
+        _link_only(ob, collection)
+        ob.data.materials.append(mats["green"])
+        return [ob]
+    raise ValueError(f"unknown shape {shape}")
+
+
+def build_random_room(spec, model, mats):
+    """Four walls (one with the window) and a ceiling slab, turned so the
+    window wall faces spec.room.facing_world_deg."""
+    r = spec["room"]
+    w, d, h, t = r["width"], r["depth"], r["height"], r["wall"]
+    win = r["window"]
+    facing = r["facing_world_deg"]
+
+    def put(name, su, sv, sz, u, v, z):
+        p = random_scene._room_to_world(facing, u, v, z)
+        return _box(name, (su, sv, sz), p, -facing, model, mats["wall"])
+    left_w = win["u"] - win["width"] / 2 + w / 2
+    right_w = w / 2 - (win["u"] + win["width"] / 2)
+    put("WallWin_L", left_w, t, h, -w / 2 + left_w / 2, d / 2, 0)
+    put("WallWin_R", right_w, t, h, w / 2 - right_w / 2, d / 2, 0)
+    put("WallWin_Low", win["width"], t, win["sill"], win["u"], d / 2, 0)
+    put("WallWin_Top", win["width"], t, h - win["top"], win["u"], d / 2, win["top"])
+    put("WallBack", w, t, h, 0, -d / 2, 0)
+    put("WallSideA", t, d, h, -w / 2, 0, 0)
+    put("WallSideB", t, d, h, w / 2, 0, 0)
+    put("Ceiling", w + t, d + t, t, 0, 0, h)
+
+
+def main_random(args, native):
+    small = (128, 72) if args.tiny else random_scene.DEFAULT_RESOLUTION
+    resolution = tuple(int(v) for v in args.resolution.lower().split("x")) \
+        if args.resolution else small
+    frames = args.frames or (3 if args.tiny else random_scene.DEFAULT_FRAMES)
+    try:
+        spec = random_scene.draw(args.random, native.sun_position, frames=frames,
+                                 resolution=resolution)
+    except ValueError as e:
+        raise SystemExit(f"generate_scene: error: --random: {e}")
+    if args.samples or args.tiny:
+        spec["render"]["samples"] = args.samples or 4
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "spec.json"), "w") as fh:
+        json.dump(spec, fh, indent=1, sort_keys=True)
+    if args.spec_only:
+        print(f"generate_scene: {args.random}: spec -> {out}/spec.json")
+        return
+    frames_dir = os.path.join(out, "frames")
+    masks_dir = os.path.join(out, "masks")
+    for d in (frames_dir, masks_dir):
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(d)
+    width, height = spec["render"]["resolution"]
+    times = random_scene.frame_times_local(spec)
+    suns = random_scene.suns_of(spec, native.sun_position)
+    north = spec["north_offset_deg"]
+    strength = [random_scene.sun_strength_factor(spec, i) for i in range(frames)]
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.context.preferences.filepaths.save_version = 0  # no .blend1 backups
+    scene = bpy.context.scene
+    model = bpy.data.collections.new("Model")
+    extras = bpy.data.collections.new("FootageOnly")
+    scene.collection.children.link(model)
+    scene.collection.children.link(extras)
+    g = spec["ground"]
+    mats = {"grey": _principled("concrete", (0.55, 0.53, 0.5)),
+            "dark": _principled("painted_metal", (0.12, 0.14, 0.16), roughness=0.5),
+            "green": _principled("foliage", (0.08, 0.2, 0.05)),
+            "wood": _principled("bench_wood", (0.35, 0.22, 0.12), roughness=0.7),
+            "car": _principled("car_paint", (0.5, 0.05, 0.04), roughness=0.3),
+            "cloth": _principled("cloth", (0.15, 0.15, 0.3), roughness=0.9),
+            "wall": _principled("plaster", (0.7, 0.68, 0.64), roughness=0.9)}
+    ground_mat = ground_material(g["kind"], g["roughness"], g["specular"])
+    if spec["kind"] == "room":
+        r = spec["room"]
+        bpy.ops.mesh.primitive_plane_add(size=1.0)
+        ground = bpy.context.active_object
+        ground.scale = (r["width"] + r["wall"], r["depth"] + r["wall"], 1.0)
+        ground.rotation_euler = (0, 0, -math.radians(r["facing_world_deg"]))
+        bpy.ops.object.transform_apply(location=False, rotation=True, scale=True)
+        build_random_room(spec, model, mats)
+    else:
+        # Far enough that every pixel sees ground (the drawer keeps the
+        # horizon out of view within 70 m).
+        bpy.ops.mesh.primitive_plane_add(size=160.0)
+        ground = bpy.context.active_object
+    ground.name = g["name"]
+    _link_only(ground, model)
+    ground.data.materials.append(ground_mat)
+    for item in spec["casters"]:
+        build_item(item, model, mats)
+    for item in spec["clutter"]:
+        build_item(item, extras, mats)
+
+    cam = bpy.data.cameras.new("Camera")
+    cam.lens = spec["camera"]["lens_mm"]
+    cam.sensor_width = random_scene.SENSOR_WIDTH_MM
+    cam.sensor_fit = "AUTO"
+    cam_obj = bpy.data.objects.new("Camera", cam)
+    scene.collection.objects.link(cam_obj)
+    cam_obj.location = spec["camera"]["location"]
+    rest = (Vector(spec["camera"]["target"]) - cam_obj.location).to_track_quat("-Z", "Y").to_euler()
+    cam_obj.rotation_euler = rest
+    scene.camera = cam_obj
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+
+    lamp = add_sun_and_sky(scene, suns, north, strength_factors=strength, sky_importance=False)
+    exposure = spec.get("exposure_ev", 0.0)
+    configure_render(scene, spec["render"]["samples"], exposure, frames, frames_dir)
+    scene.cycles.seed = spec["render"].get("seed", 0)
+    deg = spec["degradations"]
+    if deg["shake_deg"]:
+        cam_obj["rest_rotation_euler"] = list(rest)
+        for i, off in enumerate(random_scene.shake_offsets_deg(spec)):
+            cam_obj.rotation_euler = [rest[k] + math.radians(off[k]) for k in range(3)]
+            cam_obj.keyframe_insert("rotation_euler", frame=i + 1)
+        cam_obj.rotation_euler = rest
+    if deg["exposure_drift"]:
+        scene["rest_exposure"] = exposure
+        for i in range(frames):
+            scene.view_settings.exposure = exposure + random_scene.exposure_offset(spec, i)
+            scene.view_settings.keyframe_insert("exposure", frame=i + 1)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "render.blend"))
+    bpy.ops.render.render(animation=True)
+
+    clip_path = os.path.join(out, "clip.mp4")
+    encode_clip(frames_dir, clip_path, crf=deg["crf"], noise=deg["noise"])
+
+    mask_frames = sorted({1 + round(k * (frames - 1) / max(1, args.mask_frames - 1))
+                          for k in range(args.mask_frames)})
+    if scene.animation_data:  # masks at the rest exposure (they threshold irradiance)
+        scene.animation_data_clear()
+    render_masks(scene, ground, suns, north, mask_frames, masks_dir, strength)
+
+    truth = trackfile.Track(
+        clip="clip.mp4", frame_start=1, north_offset_deg=north, format=trackfile.FORMAT_TRUTH,
+        method={"initial": "ephemeris", "smoothing": None,
+                "options": {"random_scene": spec["key"]}},
+        initial={"zenith_deg": suns[0][0], "azimuth_deg": suns[0][1], "residual": 0.0},
+        frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=z, azimuth_deg=a,
+                                        raw_zenith_deg=z, raw_azimuth_deg=a, confidence=1.0)
+                for i, (z, a) in enumerate(suns)],
+        extra={"preset": f"random:{spec['key']}", "description": random_scene.describe(spec),
+               "place": spec["place"],
+               "local_times": [t.isoformat() for t in times],
+               "utc_times": [t.astimezone(dt.timezone.utc).isoformat() for t in times],
+               "model_collection": "Model", "ground_objects": [g["name"]],
+               "footage_only_objects": sorted(o.name for o in extras.objects),
+               "shadow_masks": {str(f): f"masks/mask_{f:04d}.png" for f in mask_frames},
+               "render": {"width": width, "height": height,
+                          "samples": spec["render"]["samples"]},
+               "random_scene": spec})
+    trackfile.write_track(os.path.join(out, "truth.sun.json"), truth)
+
+    save_user_blend(scene, out, clip_path, lamp, extras)
+    print(f"generate_scene: random {spec['key']}: {frames} frames {width}x{height} -> {out}")
+
+
+def render_masks(scene, ground, suns, north, mask_frames, masks_dir, strength_factors=None):
     """Ground-truth cast-shadow masks, rendered by Blender itself: a white
     override material lit only by the Sun (no sky, no bounces); ground pixels
     darker than half the lit value are in shadow. The ground is picked by its
@@ -506,7 +798,8 @@ def render_masks(scene, ground, suns, north, mask_frames, masks_dir):
         z = suns[f - 1][0]
         # Lit ground irradiance = sun strength * cos(zenith) (white albedo,
         # horizontal ground); the mask keeps ground below half of that.
-        less.inputs[1].default_value = 0.5 * SUN_STRENGTH * math.cos(math.radians(z)) / math.pi
+        k = 1.0 if strength_factors is None else strength_factors[f - 1]  # clouds
+        less.inputs[1].default_value = 0.5 * k * SUN_STRENGTH * math.cos(math.radians(z)) / math.pi
         scene.render.filepath = os.path.join(masks_dir, f"mask_{f:04d}.png")
         bpy.ops.render.render(write_still=True)
     vl.material_override = None
@@ -515,6 +808,19 @@ def render_masks(scene, ground, suns, north, mask_frames, masks_dir):
 def save_user_blend(scene, out, clip_path, lamp, extras):
     """Strips the render scene down to what a user would have."""
     bpy.data.objects.remove(lamp)
+    # Shake and exposure drift belong to the footage, not to the matched
+    # camera: the user has the camera at rest and a fixed exposure.
+    if scene.camera.animation_data:
+        scene.camera.animation_data_clear()
+        rest = scene.camera.get("rest_rotation_euler")
+        if rest is not None:
+            scene.camera.rotation_euler = rest
+            del scene.camera["rest_rotation_euler"]
+    if scene.animation_data:
+        scene.animation_data_clear()
+        scene.view_settings.exposure = scene.get("rest_exposure", 0.0)
+    if "rest_exposure" in scene:
+        del scene["rest_exposure"]
     for ob in list(extras.objects):
         bpy.data.objects.remove(ob)
     bpy.data.collections.remove(extras)

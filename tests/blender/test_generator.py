@@ -1,12 +1,15 @@
 """The rendered ground truth: tiny presets rendered by examples/generate_scene.py."""
 import copy
+import json
 import math
 import os
+import subprocess
 
 import bpy
 import numpy as np
 import pytest
 
+import random_scene  # examples/, on sys.path through conftest
 from conftest import generate_preset
 from sunlapse.core import evaluation, trackfile
 
@@ -98,3 +101,105 @@ def test_evaluation_round_trip(generated):
         f.azimuth_deg += 2.0
     r = evaluation.evaluate("t", shifted, truth)
     assert r.azimuth.mean == pytest.approx(2.0) and r.zenith.mean == pytest.approx(0, abs=1e-9)
+
+
+# ---------------------------------------------------------------------------
+# Random scenes of the suite (examples/random_scene.py, generate_scene --random)
+
+TINY_RANDOM = {"outdoor": "3", "room": "4"}  # seed 4 is a room (every fifth seed)
+TINY_FRAMES, TINY_RESOLUTION = 3, (128, 72)
+
+
+def test_random_specs_are_deterministic_and_keep_their_shadows_in_view(native):
+    keys = sorted(random_scene.FIXED) + [str(s) for s in range(1, 11)]
+    for key in keys:
+        a = random_scene.draw(key, native.sun_position)
+        b = random_scene.draw(key, native.sun_position)
+        assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True), key
+        if a["kind"] == "room":
+            assert all(random_scene.sunlit_floor_in_view(a, native.sun_position)), key
+            assert a["ground"]["name"] != "Ground"  # found by the add-on, not by name
+        else:
+            assert 2 <= len(a["casters"]) <= 5
+            assert all(random_scene.casters_in_view(a, native.sun_position)), key
+    assert random_scene.draw("1", native.sun_position) != random_scene.draw("2", native.sun_position)
+    with pytest.raises(ValueError, match="integer seed"):
+        random_scene.draw("plaza", native.sun_position)
+
+
+def test_shadow_check_rejects_a_caster_out_of_view(native):
+    spec = random_scene.draw("1", native.sun_position)
+    spec["casters"][0]["location"] = [500.0, 500.0, 0.0]
+    assert random_scene.casters_in_view(spec, native.sun_position)[0] is False
+
+
+@pytest.fixture(scope="module", params=sorted(TINY_RANDOM))
+def random_generated(request, tmp_path_factory):
+    key = TINY_RANDOM[request.param]
+    out = str(tmp_path_factory.mktemp(f"random{key}"))
+    cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
+           "--python", os.path.join(os.path.dirname(random_scene.__file__), "generate_scene.py"),
+           "--", "--random", key, "--out", out, "--tiny", "--mask-frames", "2"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return key, out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+
+
+def test_random_scene_renders_its_spec(random_generated, native):
+    key, out, truth = random_generated
+    spec = random_scene.draw(key, native.sun_position, frames=TINY_FRAMES,
+                             resolution=TINY_RESOLUTION)
+    spec["render"]["samples"] = 4  # --tiny
+    with open(os.path.join(out, "spec.json")) as fh:
+        assert json.load(fh) == json.loads(json.dumps(spec))
+    suns = random_scene.suns_of(spec, native.sun_position)
+    assert [(f.zenith_deg, f.azimuth_deg) for f in truth.frames] == pytest.approx(
+        [tuple(s) for s in suns])
+
+
+def test_random_user_blend_has_the_rest_camera_and_no_clutter(random_generated):
+    key, out, truth = random_generated
+    spec = truth.extra["random_scene"]
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(out, "scene.blend"))
+    scene = bpy.context.scene
+    assert not [o for o in bpy.data.objects if o.type == "LIGHT"]
+    names = {o.name for o in bpy.data.objects}
+    assert truth.extra["footage_only_objects"] and not names & set(
+        truth.extra["footage_only_objects"])
+    assert spec["ground"]["name"] in bpy.data.collections["Model"].all_objects
+    cam = scene.camera
+    assert cam.animation_data is None
+    look = np.array(cam.matrix_world.col[2][:3]) * -1.0  # cameras look along local -Z
+    want = np.array(spec["camera"]["target"]) - np.array(spec["camera"]["location"])
+    assert angle_deg(look, want) < 0.01
+    assert tuple(scene.active_clip.size) == TINY_RESOLUTION
+
+
+def test_random_scene_shadows_are_in_view(random_generated, native):
+    """On the truth masks (255 = ground in the Sun's cast shadow), every
+    caster's shadow is in view outdoors (a shadow pixel near where the shadow's
+    middle projects), and in a room the sunlit patch through the window is on
+    the floor in view (no shadow where its centre projects, shadow around)."""
+    key, out, truth = random_generated
+    spec = truth.extra["random_scene"]
+    cam = random_scene.camera_of(spec)
+    for frame, rel in truth.extra["shadow_masks"].items():
+        img = bpy.data.images.load(os.path.join(out, rel))
+        w, h = img.size
+        # Blender's pixels run bottom-up; flip to OpenCV rows.
+        mask = np.array(img.pixels[:]).reshape(h, w, -1)[::-1, :, 0] > 0.5
+        bpy.data.images.remove(img)
+        z, a = truth.frame(int(frame)).zenith_deg, truth.frame(int(frame)).azimuth_deg
+        sun = random_scene.sun_in_world(z, a + truth.north_offset_deg)
+
+        def near(point, radius=2):
+            x, y = (int(round(v)) for v in cam.project(point))
+            return mask[max(0, y - radius):y + radius + 1, max(0, x - radius):x + radius + 1]
+        if spec["kind"] == "room":
+            patch = random_scene.window_patch_center(spec, sun)
+            assert not near(patch, 0).any(), (frame, "no sunlit patch where the window projects")
+            assert mask.mean() > 0.05
+        else:
+            for item in spec["casters"]:
+                mid = random_scene.shadow_points(item, sun)[1]
+                assert near(mid).any(), (frame, item["name"])

@@ -1,0 +1,349 @@
+"""The randomised scene suite: render (once), estimate as users do, score.
+
+  python3 bench/suite.py [--scenes N] [--seeds 1,2,5-9] [--jobs J]
+                         [--estimator-only] [--smoothings two_pass,physical]
+                         [--method default] [--cache DIR] [--out FIGURES.json]
+
+Scenes: the fixed members of examples/random_scene.py (the plaza of issue 14,
+twice) and random seeds 1, 2, ... up to --scenes in all (default 32; every
+fifth seed is a room lit through a window). Each is rendered by
+examples/generate_scene.py --random KEY at 320x180, 32 frames, into
+CACHE/<key>/ (default build/suite-cache/, outside git), and re-rendered only
+when its spec or random_scene.GENERATOR_VERSION changes (the folder's
+cache_key file).
+
+Each scene's scene.blend is then run exactly as a user would:
+  blender -b scene.blend --python examples/run_estimate.py -- --out T --method M
+          --smoothing S
+(no --ground: the ground is found by the add-on). Printed per scene: zenith and
+azimuth mean/max error, direction mean/max, the estimate's total_s; then the
+pass rate (mean <= 1 deg and max <= 3 deg in zenith and azimuth), the
+confidence calibration (frames with confidence >= 0.8 within 2 deg; frames
+more than 5 deg off at confidence >= 0.8) and the time. Figures only: the
+exit code is 0 whatever the figures (non-zero only for bad flags).
+"""
+import argparse
+import concurrent.futures as cf
+import datetime as dt
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "examples"))
+
+import random_scene  # noqa: E402
+from core import evaluation, trackfile  # noqa: E402
+
+PASS_MEAN_DEG = 1.0
+PASS_MAX_DEG = 3.0
+CONFIDENT = 0.8
+CONFIDENT_WITHIN_DEG = 2.0
+CONFIDENT_WRONG_DEG = 5.0
+SMOOTHINGS = ("two_pass", "online", "physical")
+
+
+def sun_position():
+    try:
+        import _native  # addon/_native*.so, built by tools/install.sh
+    except ImportError as e:
+        raise SystemExit(f"suite: error: the native core is not built ({e}); "
+                         "run: bash tools/install.sh")
+    return _native.sun_position
+
+
+def scene_keys(count, seeds):
+    if seeds:
+        return seeds
+    fixed = sorted(random_scene.FIXED)
+    return (fixed + [str(s) for s in range(1, count + 1)])[:count]
+
+
+def parse_seeds(text):
+    keys = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        if part in random_scene.FIXED:
+            keys.append(part)
+            continue
+        a, _, b = part.partition("-")
+        try:
+            lo, hi = int(a), int(b or a)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"--seeds takes integers, ranges (3-7) or fixed members "
+                f"({', '.join(sorted(random_scene.FIXED))}), got '{part}'")
+        keys.extend(str(s) for s in range(lo, hi + 1))
+    if not keys:
+        raise argparse.ArgumentTypeError("--seeds is empty")
+    return keys
+
+
+def cache_key(spec):
+    text = json.dumps(spec, sort_keys=True) + f"|v{random_scene.GENERATOR_VERSION}"
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def nice_blender(*args):
+    return ["nice", "-n", "10", "blender", "-b", "--factory-startup", *args]
+
+
+# Debian's Blender finds its Python through the python3 on PATH: a pyenv or
+# venv python3 first on PATH hides numpy from it. The system one goes first.
+BLENDER_ENV = dict(os.environ, PATH="/usr/bin:" + os.environ.get("PATH", ""))
+
+
+def render(key, spec, cache, log_dir):
+    """Renders one scene unless its cache folder already holds it. Returns
+    (key, folder, seconds or None when reused, error or None)."""
+    folder = os.path.join(cache, key)
+    stamp = os.path.join(folder, "cache_key")
+    want = cache_key(spec)
+    if os.path.exists(stamp) and open(stamp).read().strip() == want and \
+            os.path.exists(os.path.join(folder, "scene.blend")):
+        return key, folder, None, None
+    shutil.rmtree(folder, ignore_errors=True)
+    log = os.path.join(log_dir, f"render-{key}.log")
+    t0 = time.perf_counter()
+    with open(log, "w") as fh:
+        rc = subprocess.run(nice_blender(
+            "--python-exit-code", "1", "--python",
+            os.path.join(ROOT, "examples", "generate_scene.py"), "--",
+            "--random", key, "--out", folder, "--mask-frames", "1"),
+            stdout=fh, stderr=subprocess.STDOUT, env=BLENDER_ENV).returncode
+    if rc != 0:
+        return key, folder, None, f"rendering failed (see {log})"
+    # The frames are in the clip; keep the cache small.
+    shutil.rmtree(os.path.join(folder, "frames"), ignore_errors=True)
+    with open(stamp, "w") as fh:
+        fh.write(want + "\n")
+    return key, folder, time.perf_counter() - t0, None
+
+
+def estimate(key, folder, method, smoothing, out_dir, log_dir):
+    track = os.path.join(out_dir, smoothing, f"{key}.sun.json")
+    os.makedirs(os.path.dirname(track), exist_ok=True)
+    if os.path.exists(track):
+        os.unlink(track)
+    args = ["--out", track, "--method", method, "--smoothing", smoothing]
+    if smoothing == "physical":
+        truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
+        d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
+        # Place and start as a user would type them (rounded), the rest fitted.
+        args += ["--latitude", str(round(truth.extra["place"]["latitude_deg"], 2)),
+                 "--longitude", str(round(truth.extra["place"]["longitude_deg"], 2)),
+                 "--date", d0.date().isoformat(), "--start-time", d0.strftime("%H:%M"),
+                 "--utc-offset", str(d0.utcoffset().total_seconds() / 3600),
+                 "--frame-seconds", str((d1 - d0).total_seconds())]
+    log = os.path.join(log_dir, f"estimate-{smoothing}-{key}.log")
+    t0 = time.perf_counter()
+    with open(log, "w") as fh:
+        rc = subprocess.run(nice_blender(
+            os.path.join(folder, "scene.blend"), "--python-exit-code", "1", "--python",
+            os.path.join(ROOT, "examples", "run_estimate.py"), "--", *args),
+            stdout=fh, stderr=subprocess.STDOUT, env=BLENDER_ENV).returncode
+    wall = time.perf_counter() - t0
+    error = None
+    if rc != 0:
+        lines = [ln.strip() for ln in open(log) if "error" in ln.lower()]
+        error = lines[-1] if lines else f"run_estimate exited {rc} (see {log})"
+    return track, wall, error
+
+
+def score(key, folder, track_path, wall_s, error):
+    """Per-scene figures (a dict, JSON-able)."""
+    truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
+    row = {"scene": key, "description": truth.extra.get("description", ""),
+           "frames": len(truth.frames), "wall_s": round(wall_s, 2), "error": error}
+    if error or not os.path.exists(track_path):
+        row.update(passed=False, estimated=0)
+        return row
+    track = trackfile.read_track(track_path)
+    rep = evaluation.evaluate(key, track, truth)
+    by_frame = {f.frame: f for f in track.frames}
+    per_frame = []
+    for t in truth.frames:
+        e = by_frame.get(t.frame)
+        if e is None or not e.has_estimate:
+            per_frame.append({"frame": t.frame, "error_deg": None,
+                              "confidence": None if e is None else e.confidence})
+            continue
+        d = evaluation.angle_between_deg(
+            evaluation.direction(e.zenith_deg, e.azimuth_deg + track.north_offset_deg),
+            evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
+        per_frame.append({"frame": t.frame, "error_deg": round(d, 4),
+                          "confidence": e.confidence})
+    timing = (track.extra or {}).get("timing", {})
+    row.update(estimated=rep.frames_estimated,
+               zenith_mean=rep.zenith and rep.zenith.mean, zenith_max=rep.zenith and rep.zenith.max,
+               azimuth_mean=rep.azimuth and rep.azimuth.mean,
+               azimuth_max=rep.azimuth and rep.azimuth.max,
+               direction_mean=rep.direction and rep.direction.mean,
+               direction_max=rep.direction and rep.direction.max,
+               total_s=timing.get("total_s"), per_frame=per_frame)
+    # Every frame must be estimated: a missing frame fails the scene.
+    row["passed"] = bool(rep.frames_estimated == len(truth.frames) and rep.zenith and
+                         rep.zenith.mean <= PASS_MEAN_DEG and rep.zenith.max <= PASS_MAX_DEG and
+                         rep.azimuth.mean <= PASS_MEAN_DEG and rep.azimuth.max <= PASS_MAX_DEG)
+    return row
+
+
+def _f(v, width=6):
+    return "-".rjust(width) if v is None else f"{v:{width}.2f}"
+
+
+def print_rows(rows, smoothing):
+    print(f"\n== smoothing: {smoothing}")
+    print(f"{'scene':<13}{'pass':>5}{'z mean':>8}{'z max':>8}{'a mean':>8}{'a max':>8}"
+          f"{'d mean':>8}{'d max':>8}{'conf>=.8':>9}{'total_s':>8}  scene")
+    for r in rows:
+        conf = [p for p in r.get("per_frame", []) if p["confidence"] is not None and
+                p["confidence"] >= CONFIDENT and p["error_deg"] is not None]
+        print(f"{r['scene']:<13}{'yes' if r['passed'] else 'NO':>5}"
+              f"{_f(r.get('zenith_mean'), 8)}{_f(r.get('zenith_max'), 8)}"
+              f"{_f(r.get('azimuth_mean'), 8)}{_f(r.get('azimuth_max'), 8)}"
+              f"{_f(r.get('direction_mean'), 8)}{_f(r.get('direction_max'), 8)}"
+              f"{len(conf):>5}/{r['frames']:<3}{_f(r.get('total_s'), 8)}  "
+              + (f"ERROR {r['error']}" if r.get("error") else r["description"]))
+
+
+def summary(rows):
+    frames = [p for r in rows for p in r.get("per_frame", [])]
+    confident = [p for p in frames if p["confidence"] is not None and
+                 p["confidence"] >= CONFIDENT and p["error_deg"] is not None]
+    times = [r["total_s"] for r in rows if r.get("total_s") is not None]
+    return {
+        "scenes": len(rows),
+        "passed": sum(r["passed"] for r in rows),
+        "pass_rate": sum(r["passed"] for r in rows) / max(1, len(rows)),
+        "frames": len(frames),
+        "frames_estimated": sum(p["error_deg"] is not None for p in frames),
+        "confident_frames": len(confident),
+        "confident_within_2deg": (sum(p["error_deg"] <= CONFIDENT_WITHIN_DEG for p in confident)
+                                  / len(confident)) if confident else None,
+        "confident_over_5deg": sum(p["error_deg"] > CONFIDENT_WRONG_DEG for p in confident),
+        "total_s_mean": sum(times) / len(times) if times else None,
+        "total_s_max": max(times) if times else None,
+        "total_s_sum": sum(times) if times else None,
+        "failed_runs": [r["scene"] for r in rows if r.get("error")],
+    }
+
+
+def print_summary(s, smoothing):
+    within = "-" if s["confident_within_2deg"] is None else f"{100 * s['confident_within_2deg']:.1f}%"
+    print(f"summary ({smoothing}): {s['passed']}/{s['scenes']} scenes pass "
+          f"({100 * s['pass_rate']:.0f}%; target >= 95%); frames estimated "
+          f"{s['frames_estimated']}/{s['frames']}; confidence >= {CONFIDENT}: "
+          f"{s['confident_frames']} frames, {within} within {CONFIDENT_WITHIN_DEG:g} deg, "
+          f"{s['confident_over_5deg']} more than {CONFIDENT_WRONG_DEG:g} deg off (target 0); "
+          f"estimate total_s mean {_f(s['total_s_mean'], 0)} max {_f(s['total_s_max'], 0)} "
+          f"sum {_f(s['total_s_sum'], 0)}"
+          + (f"; runs failed: {', '.join(s['failed_runs'])}" if s["failed_runs"] else ""))
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scenes", type=int, default=32,
+                   help="how many scenes: the fixed members, then seeds 1, 2, ... (default 32)")
+    p.add_argument("--seeds", type=parse_seeds,
+                   help="exactly these scenes instead: e.g. 1,4,10-12,plaza14")
+    p.add_argument("--jobs", type=int, default=1, help="scenes rendered/estimated at once")
+    p.add_argument("--estimator-only", action="store_true",
+                   help="never render: estimate the scenes already in the cache")
+    p.add_argument("--render-only", action="store_true", help="render (or reuse), no estimates")
+    p.add_argument("--method", default="default", choices=["default", "thesis"])
+    p.add_argument("--smoothings", default="two_pass",
+                   help=f"comma-separated, of {', '.join(SMOOTHINGS)} (default two_pass)")
+    p.add_argument("--cache", default=os.environ.get(
+        "SUNLAPSE_SUITE_CACHE", os.path.join(ROOT, "build", "suite-cache")),
+        help="rendered scenes (default build/suite-cache or $SUNLAPSE_SUITE_CACHE)")
+    p.add_argument("--work", default=os.path.join(ROOT, "build", "suite-runs"),
+                   help="tracks and logs")
+    p.add_argument("--out", help="write the figures (per scene, per frame, summary) as JSON")
+    args = p.parse_args(argv)
+    if args.scenes < 1:
+        p.error(f"--scenes must be at least 1, got {args.scenes}")
+    if args.jobs < 1:
+        p.error(f"--jobs must be at least 1, got {args.jobs}")
+    smoothings = [s for s in args.smoothings.split(",") if s]
+    bad = [s for s in smoothings if s not in SMOOTHINGS]
+    if bad or not smoothings:
+        p.error(f"--smoothings takes {', '.join(SMOOTHINGS)}, got '{args.smoothings}'")
+    keys = scene_keys(args.scenes, args.seeds)
+    cache, work = os.path.abspath(args.cache), os.path.abspath(args.work)
+    log_dir = os.path.join(work, "logs")
+    os.makedirs(cache, exist_ok=True)
+    os.makedirs(log_dir, exist_ok=True)
+
+    sp = sun_position()
+    specs = {}
+    for k in keys:
+        spec = random_scene.draw(k, sp)
+        # generate_scene.py writes the samples it used; these are its defaults.
+        specs[k] = spec
+    folders, render_errors = {}, {}
+    t_render = time.perf_counter()
+    if args.estimator_only:
+        for k in keys:
+            folder = os.path.join(cache, k)
+            stamp = os.path.join(folder, "cache_key")
+            if not os.path.exists(stamp):
+                render_errors[k] = "not in the cache (run without --estimator-only)"
+            elif open(stamp).read().strip() != cache_key(specs[k]):
+                render_errors[k] = "cached render is stale (the generator changed)"
+            else:
+                folders[k] = folder
+    else:
+        rendered = 0
+        with cf.ThreadPoolExecutor(args.jobs) as pool:
+            for k, folder, secs, err in pool.map(
+                    lambda k: render(k, specs[k], cache, log_dir), keys):
+                if err:
+                    render_errors[k] = err
+                    print(f"suite: {k}: {err}", flush=True)
+                    continue
+                folders[k] = folder
+                if secs is not None:
+                    rendered += 1
+                    print(f"rendered {k} in {secs:.0f} s: {random_scene.describe(specs[k])}",
+                          flush=True)
+        print(f"renders: {rendered} new, {len(folders) - rendered} reused from {cache} "
+              f"({time.perf_counter() - t_render:.0f} s)", flush=True)
+    if args.render_only:
+        return 0
+
+    figures = {"method": args.method, "cache": cache, "smoothings": {}}
+    t_all = time.perf_counter()
+    for smoothing in smoothings:
+        def run(k):
+            if k in render_errors:
+                return {"scene": k, "description": random_scene.describe(specs[k]),
+                        "frames": specs[k]["render"]["frames"], "wall_s": 0.0,
+                        "error": render_errors[k], "passed": False, "estimated": 0}
+            track, wall, err = estimate(k, folders[k], args.method, smoothing,
+                                        os.path.join(work, "tracks"), log_dir)
+            return score(k, folders[k], track, wall, err)
+        with cf.ThreadPoolExecutor(args.jobs) as pool:
+            rows = list(pool.map(run, keys))
+        print_rows(rows, smoothing)
+        s = summary(rows)
+        print_summary(s, smoothing)
+        figures["smoothings"][smoothing] = {"summary": s, "scenes": rows}
+    print(f"\nsuite: {len(keys)} scenes x {len(smoothings)} smoothing(s) in "
+          f"{time.perf_counter() - t_all:.0f} s; tracks and logs in {work}")
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump(figures, fh, indent=1)
+        print(f"figures: {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

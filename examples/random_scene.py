@@ -1,0 +1,579 @@
+"""Draws random scenes for the scene suite: a seed in, a scene spec out.
+
+bpy-free: the spec is a plain JSON-able dict that examples/generate_scene.py
+(`--random KEY`) turns into a render, and that bench/suite.py hashes into its
+cache key. KEY is an integer seed or the name of a fixed member (FIXED).
+
+The Sun comes from a `sun_position(y, m, d, h, mi, s, lat, lon) -> (zenith,
+azimuth)` callable (UTC; `_native.sun_position`), so drawing is exactly
+reproducible and checks (shadows in view, sunlit floor in view) use the same
+ephemeris as the render.
+
+World frame as everywhere in sunlapse (DESIGN.md §2): +Z up, +Y is the scene's
+"north", azimuth_world = azimuth_geographic + north_offset.
+"""
+
+import datetime as dt
+import math
+import random
+
+# Bump whenever the rendering of a spec changes (materials, lamp, encoding);
+# changes to the drawing rules change the specs themselves and so the key.
+GENERATOR_VERSION = 1
+
+SENSOR_WIDTH_MM = 36.0
+# Scenes are judged at this size (bench/suite.py renders them so).
+DEFAULT_FRAMES = 32
+DEFAULT_RESOLUTION = (320, 180)
+# Longest shadows we ask for: beyond ~80 deg the shadows leave any view.
+MAX_ZENITH_DEG = 78.0
+# A Sun within a few degrees of the zenith has no meaningful azimuth (the
+# pass criterion judges azimuth alone).
+MIN_ZENITH_DEG = 8.0
+ROOM_EVERY = 5  # seeds with seed % ROOM_EVERY == ROOM_EVERY - 1 are rooms
+
+GROUNDS = ["paving", "asphalt", "grass", "wood", "cobbles"]
+CASTER_SHAPES = ["pole", "box", "wall", "kiosk", "lshape", "cylinder"]
+CLUTTER_KINDS = ["bin", "bush", "bench", "person", "car"]
+
+
+# ---------------------------------------------------------------------------
+# Small vector helpers (no numpy needed)
+
+def _sub(a, b):
+    return [a[i] - b[i] for i in range(3)]
+
+
+def _dot(a, b):
+    return sum(a[i] * b[i] for i in range(3))
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _unit(a):
+    n = math.sqrt(_dot(a, a))
+    return [x / n for x in a]
+
+
+def sun_in_world(zenith_deg, azimuth_world_deg):
+    z, a = math.radians(zenith_deg), math.radians(azimuth_world_deg)
+    return [math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)]
+
+
+class PinholeCamera:
+    """Blender's camera (sensor fit AUTO, 36 mm, landscape, no shift) aimed at
+    `target` with no roll, as Vector.to_track_quat('-Z', 'Y') aims it."""
+
+    def __init__(self, location, target, lens_mm, width, height):
+        self.location = list(location)
+        self.width, self.height = width, height
+        self.f_px = lens_mm / SENSOR_WIDTH_MM * width
+        self.forward = _unit(_sub(target, location))
+        self.right = _unit(_cross(self.forward, [0.0, 0.0, 1.0]))
+        self.up = _cross(self.right, self.forward)
+
+    def project(self, point_in_world):
+        """OpenCV pixel (x right, y down) or None behind the camera."""
+        p = _sub(point_in_world, self.location)
+        depth = _dot(p, self.forward)
+        if depth <= 1e-6:
+            return None
+        return (self.width / 2.0 + self.f_px * _dot(p, self.right) / depth,
+                self.height / 2.0 - self.f_px * _dot(p, self.up) / depth)
+
+    def in_view(self, point_in_world, margin=0.05):
+        px = self.project(point_in_world)
+        if px is None:
+            return False
+        mx, my = margin * self.width, margin * self.height
+        return mx <= px[0] <= self.width - mx and my <= px[1] <= self.height - my
+
+    def ground_point(self, x_px, y_px, ground_z=0.0):
+        """Where the pixel's ray meets the plane z = ground_z (None if above)."""
+        d = [self.forward[i] + ((x_px - self.width / 2.0) * self.right[i]
+                                - (y_px - self.height / 2.0) * self.up[i]) / self.f_px
+             for i in range(3)]
+        if d[2] >= -1e-6:
+            return None
+        t = (ground_z - self.location[2]) / d[2]
+        return [self.location[i] + t * d[i] for i in range(3)]
+
+
+def camera_of(spec):
+    c = spec["camera"]
+    w, h = spec["render"]["resolution"]
+    return PinholeCamera(c["location"], c["target"], c["lens_mm"], w, h)
+
+
+# ---------------------------------------------------------------------------
+# Time and the Sun
+
+def frame_times_local(spec):
+    t = spec["time"]
+    tz = dt.timezone(dt.timedelta(hours=t["utc_offset_h"]))
+    start = dt.datetime.fromisoformat(t["start_local"]).replace(tzinfo=tz)
+    step = dt.timedelta(minutes=t["minutes_per_frame"])
+    return [start + i * step for i in range(spec["render"]["frames"])]
+
+
+def _sun(sun_position, when, lat, lon):
+    u = when.astimezone(dt.timezone.utc)
+    return sun_position(u.year, u.month, u.day, u.hour, u.minute,
+                        u.second + u.microsecond * 1e-6, lat, lon)
+
+
+def suns_of(spec, sun_position):
+    """Per frame (zenith, geographic azimuth), degrees."""
+    p = spec["place"]
+    return [tuple(_sun(sun_position, t, p["latitude_deg"], p["longitude_deg"]))
+            for t in frame_times_local(spec)]
+
+
+def _draw_time(rng, sun_position, frames, hours_range, ok):
+    """A place, a date and a window of `hours_range` hours whose Sun stays
+    below MAX_ZENITH_DEG and satisfies ok(suns_world_fn)."""
+    for _ in range(400):
+        lat = rng.uniform(-60.0, 65.0)
+        lon = rng.uniform(-180.0, 180.0)
+        utc = max(-12, min(14, round(lon / 15.0)))
+        day = dt.date(2025, 1, 1) + dt.timedelta(days=rng.randrange(365))
+        tz = dt.timezone(dt.timedelta(hours=utc))
+        midnight = dt.datetime(day.year, day.month, day.day, tzinfo=tz)
+        # Daylight with a Sun high enough, sampled every 10 minutes.
+        good = [m for m in range(0, 24 * 60, 10)
+                if _sun(sun_position, midnight + dt.timedelta(minutes=m), lat, lon)[0]
+                < MAX_ZENITH_DEG - 0.5]
+        if len(good) < 7:
+            continue
+        first, last = good[0], good[-1]
+        hours = min(rng.uniform(*hours_range), (last - first) / 60.0)
+        if hours < hours_range[0]:
+            continue
+        start_min = rng.uniform(first, last - hours * 60.0)
+        start = midnight + dt.timedelta(minutes=round(start_min))
+        mpf = round(hours * 60.0 / (frames - 1), 3)
+        times = [start + dt.timedelta(minutes=i * mpf) for i in range(frames)]
+        suns = [_sun(sun_position, t, lat, lon) for t in times]
+        if max(z for z, _ in suns) >= MAX_ZENITH_DEG or min(z for z, _ in suns) < MIN_ZENITH_DEG:
+            continue  # a midday dip below the bound (polar days), or overhead
+        result = dict(place={"latitude_deg": round(lat, 4), "longitude_deg": round(lon, 4)},
+                      time={"start_local": start.replace(tzinfo=None).isoformat(),
+                            "utc_offset_h": utc, "minutes_per_frame": mpf})
+        if ok(suns):
+            return result, suns
+    raise RuntimeError("could not draw a time window")
+
+
+# ---------------------------------------------------------------------------
+# Casters and clutter
+
+def _footprint_radius(item):
+    s = item["size"]
+    if item["shape"] == "lshape":
+        return math.hypot(s[0], s[1])
+    if item["shape"] in ("cylinder", "bush", "bin", "person"):
+        return s[0]
+    return 0.5 * math.hypot(s[0], s[1])
+
+
+def _draw_caster(rng, shape, thin):
+    """Size (metres) of one caster; `thin` is the smallest width that still
+    covers ~2.5 pixels at the view's scale."""
+    if shape == "pole":
+        w = max(thin, rng.uniform(0.12, 0.22))
+        return {"size": [w, w, rng.uniform(2.5, 5.0)], "round": rng.random() < 0.4}
+    if shape == "box":
+        return {"size": [rng.uniform(0.8, 2.5), rng.uniform(0.8, 2.5), rng.uniform(0.8, 2.0)]}
+    if shape == "wall":
+        return {"size": [rng.uniform(3.0, 7.0), max(thin, rng.uniform(0.2, 0.35)),
+                         rng.uniform(1.2, 2.8)]}
+    if shape == "kiosk":
+        b = rng.uniform(1.5, 2.5)
+        return {"size": [b, rng.uniform(1.5, 2.5), rng.uniform(2.2, 2.9)],
+                "roof_overhang": rng.uniform(0.2, 0.45)}
+    if shape == "lshape":
+        return {"size": [rng.uniform(2.0, 4.0), rng.uniform(1.5, 3.5), rng.uniform(1.2, 2.5)],
+                "thickness": max(thin, rng.uniform(0.2, 0.3))}
+    if shape == "cylinder":
+        return {"size": [rng.uniform(0.3, 1.0), 0.0, rng.uniform(1.0, 3.0)]}
+    raise ValueError(shape)
+
+
+def _draw_clutter(rng, kind):
+    return {"bin": [0.3, 0.0, 0.9], "bush": [rng.uniform(0.4, 0.8), 0.0, 0.0],
+            "bench": [1.8, 0.5, 0.45], "person": [0.22, 0.0, rng.uniform(1.6, 1.85)],
+            "car": [4.2, 1.8, 1.4]}[kind]
+
+
+def _shadow_probe_points(item):
+    """Points whose shadows must be in view: the top of the caster (the tip
+    of its shadow) and half way up (half way along the shadow)."""
+    x, y = item["location"][:2]
+    h = item["size"][2]
+    return [[x, y, 0.0], [x, y, 0.5 * h]]
+
+
+def shadow_points(item, sun_world):
+    """Ground points of the probes' shadows (z = 0)."""
+    out = []
+    for p in _shadow_probe_points(item):
+        t = p[2] / sun_world[2]
+        out.append([p[0] - t * sun_world[0], p[1] - t * sun_world[1], 0.0])
+    return out
+
+
+def check_frames(n):
+    return sorted({0, n // 2, n - 1})
+
+
+def casters_in_view(spec, sun_position):
+    """Per caster, whether its base and its shadow's half-way point are in
+    view on the first, middle and last frame (outdoor scenes)."""
+    cam = camera_of(spec)
+    suns = suns_of(spec, sun_position)
+    north = spec["north_offset_deg"]
+    out = []
+    for item in spec["casters"]:
+        ok = True
+        for i in check_frames(len(suns)):
+            s = sun_in_world(suns[i][0], suns[i][1] + north)
+            ok = ok and all(cam.in_view(p, 0.03) for p in shadow_points(item, s))
+        out.append(ok)
+    return out
+
+
+def _place(rng, cam, item, placed, suns_world, tries=300):
+    for _ in range(tries):
+        px = (rng.uniform(0.12, 0.88) * cam.width, rng.uniform(0.2, 0.9) * cam.height)
+        g = cam.ground_point(*px)
+        if g is None:
+            continue
+        item["location"] = [round(g[0], 3), round(g[1], 3), 0.0]
+        r = _footprint_radius(item)
+        if any(math.hypot(g[0] - q["location"][0], g[1] - q["location"][1])
+               < r + _footprint_radius(q) + 0.6 for q in placed):
+            continue
+        if not cam.in_view(g, 0.06):
+            continue
+        if all(cam.in_view(p, 0.04) for s in suns_world for p in shadow_points(item, s)):
+            return True
+    return False
+
+
+def _draw_outdoor(rng, sun_position, frames, resolution):
+    t, suns = _draw_time(rng, sun_position, frames, (1.0, 8.0), lambda s: True)
+    north = round(rng.uniform(-180.0, 180.0), 2)
+    width, height = resolution
+    for _ in range(500):
+        height_m = rng.uniform(2.0, 20.0)
+        lens = rng.uniform(18.0, 50.0)
+        depression = rng.uniform(25.0, 70.0)
+        # The whole frame must see ground (the top edge below the horizon).
+        vfov_half = math.degrees(math.atan(SENSOR_WIDTH_MM * height / width / 2.0 / lens))
+        if depression - vfov_half < 6.0:
+            continue
+        dist_h = height_m / math.tan(math.radians(depression))
+        slant = math.hypot(height_m, dist_h)
+        view_width_m = slant * SENSOR_WIDTH_MM / lens
+        if not 7.0 <= view_width_m <= 32.0:
+            continue
+        far = PinholeCamera([0, -dist_h, height_m], [0, 0, 0], lens, width, height).ground_point(
+            width / 2.0, 0.0)
+        if far is None or math.hypot(far[0], far[1] + dist_h) > 70.0:
+            continue
+        break
+    else:
+        raise RuntimeError("could not draw a camera")
+    yaw = rng.uniform(0.0, 360.0)
+    loc = [dist_h * math.sin(math.radians(yaw)), dist_h * math.cos(math.radians(yaw)), height_m]
+    spec = dict(kind="outdoor", **t, north_offset_deg=north,
+                camera={"location": [round(v, 4) for v in loc], "target": [0.0, 0.0, 0.0],
+                        "lens_mm": round(lens, 2)},
+                render={"frames": frames, "resolution": list(resolution), "samples": 8})
+    cam = camera_of(spec)
+    thin = 2.5 * view_width_m / width
+    suns_world = [sun_in_world(z, a + north) for z, a in (suns[i] for i in check_frames(frames))]
+    casters = []
+    want = rng.randint(2, 5)
+    shapes = [rng.choice(CASTER_SHAPES) for _ in range(want)]
+    for k, shape in enumerate(shapes):
+        item = dict(shape=shape, name=f"{shape.capitalize()}{k + 1}",
+                    rotation_z_deg=round(rng.uniform(0.0, 180.0), 2), **_draw_caster(rng, shape, thin))
+        full_height = item["size"][2]
+        for scale in (1.0, 0.75, 0.55, 0.4):
+            # Too long a shadow for this view: a lower caster.
+            item["size"][2] = round(full_height * scale, 3)
+            if _place(rng, cam, item, casters, suns_world):
+                casters.append(item)
+                break
+    if len(casters) < 2:
+        return None
+    clutter = []
+    for k in range(rng.randint(1, 4)):
+        kind = rng.choice(CLUTTER_KINDS if rng.random() < 0.3 else CLUTTER_KINDS[:4])
+        item = dict(shape=kind, name=f"Clutter{k + 1}_{kind}", size=_draw_clutter(rng, kind),
+                    rotation_z_deg=round(rng.uniform(0.0, 180.0), 2))
+        for _ in range(200):
+            g = cam.ground_point(rng.uniform(0.05, 0.95) * width, rng.uniform(0.1, 0.95) * height)
+            if g is None:
+                continue
+            if all(math.hypot(g[0] - q["location"][0], g[1] - q["location"][1])
+                   > _footprint_radius(item) + _footprint_radius(q) + 0.4
+                   for q in casters + clutter):
+                item["location"] = [round(g[0], 3), round(g[1], 3), 0.0]
+                clutter.append(item)
+                break
+    spec.update(casters=casters, clutter=clutter,
+                ground={"kind": rng.choice(GROUNDS), "name": "Ground",
+                        "roughness": round(rng.uniform(0.55, 1.0), 3),
+                        "specular": round(rng.uniform(0.2, 0.5), 3)})
+    return spec
+
+
+# ---------------------------------------------------------------------------
+# Rooms
+
+def window_patch_center(spec, sun_world):
+    """Where the Sun through the window's centre meets the floor (z = 0)."""
+    r = spec["room"]
+    c = r["window_center"]
+    t = c[2] / sun_world[2]
+    return [c[0] - t * sun_world[0], c[1] - t * sun_world[1], 0.0]
+
+
+def inside_room(spec, p, margin=0.3):
+    r = spec["room"]
+    a = math.radians(r["facing_world_deg"])
+    # Room axes: +v toward the window wall, +u to its right.
+    v = p[0] * math.sin(a) + p[1] * math.cos(a)
+    u = p[0] * math.cos(a) - p[1] * math.sin(a)
+    return abs(u) < r["width"] / 2 - margin and abs(v) < r["depth"] / 2 - margin
+
+
+def sunlit_floor_in_view(spec, sun_position):
+    cam = camera_of(spec)
+    suns = suns_of(spec, sun_position)
+    north = spec["north_offset_deg"]
+    out = []
+    for i in check_frames(len(suns)):
+        p = window_patch_center(spec, sun_in_world(suns[i][0], suns[i][1] + north))
+        out.append(inside_room(spec, p) and cam.in_view(p, 0.05))
+    return out
+
+
+def _room_to_world(facing_deg, u, v, z):
+    a = math.radians(facing_deg)
+    return [u * math.cos(a) + v * math.sin(a), -u * math.sin(a) + v * math.cos(a), z]
+
+
+def _draw_room(rng, sun_position, frames, resolution):
+    w, d, h = rng.uniform(4.5, 7.0), rng.uniform(4.0, 6.0), rng.uniform(2.6, 3.2)
+    win_w = rng.uniform(1.2, min(2.6, w - 1.5))
+    sill = rng.uniform(0.4, 0.9)
+    top = min(h - 0.3, sill + rng.uniform(1.2, 1.8))
+    win_u = rng.uniform(-(w - win_w) / 2 + 0.5, (w - win_w) / 2 - 0.5)
+    north = round(rng.uniform(-180.0, 180.0), 2)
+    turn = rng.uniform(-25.0, 25.0)
+    box = {}
+
+    def ok(suns):
+        # The window faces the middle Sun (turned a little); the Sun must come
+        # in through it onto the floor inside the room all clip long.
+        facing = suns[len(suns) // 2][1] + north + turn
+        for z, a in suns:
+            if abs((a + north - facing + 180) % 360 - 180) > 60:
+                return False
+            s = sun_in_world(z, a + north)
+            v_dist = (sill + top) / 2 * math.tan(math.radians(z)) * abs(
+                math.cos(math.radians(a + north - facing)))
+            if not 0.4 < v_dist < d - 0.6:
+                return False
+        box["facing"] = facing
+        return True
+
+    t, suns = _draw_time(rng, sun_position, frames, (1.0, 3.0), ok)
+    facing = round(box["facing"] % 360.0, 3)
+    room = {"width": round(w, 3), "depth": round(d, 3), "height": round(h, 3), "wall": 0.2,
+            "window": {"u": round(win_u, 3), "width": round(win_w, 3), "sill": round(sill, 3),
+                       "top": round(top, 3)},
+            "facing_world_deg": facing}
+    room["window_center"] = [round(c, 4) for c in
+                             _room_to_world(facing, win_u, d / 2, (sill + top) / 2)]
+    spec = dict(kind="room", **t, north_offset_deg=north, room=room,
+                render={"frames": frames, "resolution": list(resolution), "samples": 24},
+                exposure_ev=round(rng.uniform(1.0, 2.0), 2))
+    mid_sun = sun_in_world(suns[frames // 2][0], suns[frames // 2][1] + north)
+    target = window_patch_center(spec, mid_sun)
+    for _ in range(300):
+        lens = rng.uniform(18.0, 24.0)
+        cu = rng.uniform(-w / 2 + 0.5, w / 2 - 0.5)
+        cv = rng.uniform(-d / 2 + 0.4, -d / 2 + 1.5)
+        ch = rng.uniform(2.0, min(2.6, h - 0.2))
+        spec["camera"] = {"location": [round(c, 4) for c in _room_to_world(facing, cu, cv, ch)],
+                          "target": [round(c, 4) for c in target], "lens_mm": round(lens, 2)}
+        if all(sunlit_floor_in_view(spec, sun_position)):
+            break
+    else:
+        return None
+    furniture = []
+    options = [("table", [1.2, 0.8, 0.75]), ("cabinet", [0.5, 1.0, 1.6]),
+               ("shelf", [1.0, 0.35, 1.9]), ("stool", [0.4, 0.4, 0.6])]
+    for k in range(rng.randint(1, 3)):
+        kind, size = options[rng.randrange(len(options))]
+        for _ in range(100):
+            u, v = rng.uniform(-w / 2 + 0.6, w / 2 - 0.6), rng.uniform(-d / 2 + 0.6, d / 2 - 0.6)
+            p = _room_to_world(facing, u, v, 0.0)
+            if math.dist(p[:2], spec["camera"]["location"][:2]) < 1.0:
+                continue
+            if all(math.dist(p[:2], q["location"][:2]) > 1.4 for q in furniture):
+                furniture.append(dict(shape="box", name=f"{kind.capitalize()}{k + 1}",
+                                      size=list(size), location=[round(c, 3) for c in p],
+                                      rotation_z_deg=round(-facing + rng.uniform(-20, 20), 2)))
+                break
+    clutter = []
+    for k, (kind, size) in enumerate([("bin", [0.18, 0.0, 0.5]), ("bush", [0.3, 0.0, 0.0])][
+            :rng.randint(1, 2)]):
+        u, v = rng.uniform(-w / 2 + 0.5, w / 2 - 0.5), rng.uniform(-d / 2 + 0.5, d / 2 - 0.5)
+        clutter.append(dict(shape=kind, name=f"Clutter{k + 1}_{kind}", size=size,
+                            location=[round(c, 3) for c in _room_to_world(facing, u, v, 0.0)],
+                            rotation_z_deg=0.0))
+    spec.update(casters=furniture, clutter=clutter,
+                ground={"kind": rng.choice(["wood", "paving"]), "name": "Floor",
+                        "roughness": round(rng.uniform(0.5, 0.95), 3),
+                        "specular": round(rng.uniform(0.2, 0.5), 3)})
+    return spec
+
+
+# ---------------------------------------------------------------------------
+# Footage degradations
+
+def _draw_degradations(rng, frames):
+    clouds = []
+    if rng.random() < 0.35:
+        for _ in range(rng.randint(1, 2)):
+            clouds.append({"frame": rng.randint(2, frames - 1), "width_frames": rng.randint(2, 5),
+                           "depth": round(rng.uniform(0.3, 0.75), 3)})
+    drift = None
+    if rng.random() < 0.5:
+        drift = {"amplitude_ev": round(rng.uniform(0.1, 0.5), 3),
+                 "period_frames": round(rng.uniform(frames * 0.5, frames * 2.0), 2),
+                 "phase": round(rng.uniform(0.0, 2 * math.pi), 3)}
+    shake = round(rng.uniform(0.02, 0.1), 4) if rng.random() < 0.4 else 0.0
+    return {"noise": rng.randint(0, 12), "crf": rng.randint(18, 30), "clouds": clouds,
+            "exposure_drift": drift, "shake_deg": shake}
+
+
+def sun_strength_factor(spec, frame_index):
+    """Clouds: the Sun's strength dips smoothly (1 = clear)."""
+    f = 1.0
+    for c in spec["degradations"]["clouds"]:
+        x = (frame_index + 1 - c["frame"]) / max(c["width_frames"] / 2.0, 0.5)
+        f *= 1.0 - c["depth"] * math.exp(-x * x)
+    return f
+
+
+def exposure_offset(spec, frame_index):
+    d = spec["degradations"]["exposure_drift"]
+    if not d:
+        return 0.0
+    return d["amplitude_ev"] * math.sin(2 * math.pi * frame_index / d["period_frames"] + d["phase"])
+
+
+def shake_offsets_deg(spec):
+    """Per frame (x, y, z) rotation offsets of the camera, degrees."""
+    s = spec["degradations"]["shake_deg"]
+    rng = random.Random(f"shake-{spec['key']}")
+    return [[round(rng.gauss(0.0, s), 5) if s else 0.0 for _ in range(3)]
+            for _ in range(spec["render"]["frames"])]
+
+
+# ---------------------------------------------------------------------------
+# Fixed members
+
+def _plaza14(key, yaw_deg, north, sun_position, frames, resolution):
+    """The plaza of issue 14: a 3.2 m pole, a kiosk, a 5 m long 2 m high wall,
+    tiled paving (roughness 0.9: brighter far away), a few small unmodelled
+    objects; camera 9 m away, 6.5 m up, 28 mm; the Sun from the east at about
+    50 deg zenith rising to about 16 deg at noon over 6.5 hours."""
+    yaw = math.radians(yaw_deg)
+    spec = dict(kind="outdoor", key=key,
+                place={"latitude_deg": 39.47, "longitude_deg": -0.38},
+                time={"start_local": "2025-06-21T10:15:00", "utc_offset_h": 2,
+                      "minutes_per_frame": round(6.5 * 60 / (frames - 1), 3)},
+                north_offset_deg=north,
+                camera={"location": [9.0 * math.sin(yaw), 9.0 * math.cos(yaw), 6.5],
+                        "target": [0.0, 0.0, 0.0], "lens_mm": 28.0},
+                render={"frames": frames, "resolution": list(resolution), "samples": 8},
+                ground={"kind": "paving", "name": "Ground", "roughness": 0.9, "specular": 0.2},
+                casters=[
+                    {"shape": "pole", "name": "Lamp", "size": [0.14, 0.14, 3.2], "round": True,
+                     "location": [1.5, -0.8, 0.0], "rotation_z_deg": 0.0},
+                    {"shape": "kiosk", "name": "Kiosk", "size": [2.0, 1.6, 2.5],
+                     "roof_overhang": 0.3, "location": [-2.2, 1.0, 0.0], "rotation_z_deg": 15.0},
+                    {"shape": "wall", "name": "Wall", "size": [5.0, 0.3, 2.0],
+                     "location": [0.8, 3.2, 0.0], "rotation_z_deg": 8.0}],
+                clutter=[
+                    {"shape": "bin", "name": "Clutter1_bin", "size": [0.3, 0.0, 0.9],
+                     "location": [-0.5, -2.0, 0.0], "rotation_z_deg": 0.0},
+                    {"shape": "bench", "name": "Clutter2_bench", "size": [1.8, 0.5, 0.45],
+                     "location": [2.8, 1.0, 0.0], "rotation_z_deg": 70.0},
+                    {"shape": "bush", "name": "Clutter3_bush", "size": [0.45, 0.0, 0.0],
+                     "location": [-3.5, -1.5, 0.0], "rotation_z_deg": 0.0}],
+                degradations={"noise": 4, "crf": 23, "clouds": [], "exposure_drift": None,
+                              "shake_deg": 0.0})
+    return spec
+
+
+FIXED = {
+    # As issue 14 describes it: the camera looks north-west, the Sun rises in
+    # the east behind it on the right.
+    "plaza14": dict(yaw_deg=200.0, north=0.0),
+    # The same plaza seen from the west with the compass turned.
+    "plaza14_west": dict(yaw_deg=250.0, north=40.0),
+}
+
+
+def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION):
+    """The scene spec for `key`: an integer seed or a name in FIXED."""
+    key = str(key)
+    if key in FIXED:
+        spec = _plaza14(key, sun_position=sun_position, frames=frames,
+                        resolution=resolution, **FIXED[key])
+    else:
+        try:
+            seed = int(key)
+        except ValueError:
+            raise ValueError(f"scene key must be an integer seed or one of "
+                             f"{', '.join(sorted(FIXED))}, got '{key}'") from None
+        rng = random.Random(seed)
+        room = seed % ROOM_EVERY == ROOM_EVERY - 1
+        spec = None
+        for _ in range(20):  # an unlucky draw (no caster fits) draws again
+            spec = (_draw_room if room else _draw_outdoor)(rng, sun_position, frames,
+                                                           tuple(resolution))
+            if spec is not None:
+                break
+        if spec is None:
+            raise RuntimeError(f"seed {seed}: no scene could be drawn")
+        spec["key"] = key
+        spec["degradations"] = _draw_degradations(rng, frames)
+        spec["render"]["seed"] = seed
+    spec["generator_version"] = GENERATOR_VERSION
+    return spec
+
+
+def describe(spec):
+    """One short line: what the scene is."""
+    p, t = spec["place"], spec["time"]
+    hours = t["minutes_per_frame"] * (spec["render"]["frames"] - 1) / 60.0
+    cam = spec["camera"]
+    shapes = ",".join(c["shape"] for c in spec["casters"])
+    deg = spec["degradations"]
+    flags = [f for f, on in (("clouds", deg["clouds"]), ("drift", deg["exposure_drift"]),
+                             ("shake", deg["shake_deg"])) if on]
+    return (f"{spec['kind']} lat {p['latitude_deg']:.1f} lon {p['longitude_deg']:.1f} "
+            f"{t['start_local'][:16]} {hours:.1f}h N{spec['north_offset_deg']:+.0f} "
+            f"cam {cam['location'][2]:.1f}m {cam['lens_mm']:.0f}mm {spec['ground']['kind']} "
+            f"[{shapes}] {' '.join(flags)}").strip()
