@@ -35,6 +35,7 @@ void BindSky(py::module_& m) {
                      &SkyEvidenceOptions::ignore_bottom_rows)
       .def_readwrite("normal_bin_deg", &SkyEvidenceOptions::normal_bin_deg)
       .def_readwrite("min_side_samples", &SkyEvidenceOptions::min_side_samples)
+      .def_readwrite("band_steps", &SkyEvidenceOptions::band_steps)
       .def_readwrite("max_ratio", &SkyEvidenceOptions::max_ratio)
       .def_readwrite("reference_quantile",
                      &SkyEvidenceOptions::reference_quantile)

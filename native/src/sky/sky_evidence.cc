@@ -91,6 +91,7 @@ void SkyEvidenceOptions::Check() const {
   Require(normal_bin_deg > 0 && normal_bin_deg < 90,
           "normal_bin_deg must be in (0, 90)");
   Require(min_side_samples >= 1, "min_side_samples must be >= 1");
+  Require(band_steps >= 0 && band_steps <= 20, "band_steps must be in [0, 20]");
   Require(max_ratio > 1, "max_ratio must be > 1");
   Require(reference_quantile > 0 && reference_quantile < 1,
           "reference_quantile must be in (0, 1)");
@@ -115,10 +116,19 @@ struct SkyEvidence::Impl {
   // run over them and the lit side is the group's total minus them.
   std::vector<int32_t> shaded;
   std::vector<int64_t> shaded_begin;  // size D + 1
-  std::vector<float> reference;       // empty until SetReference
-  std::vector<uint8_t> scores;        // frames x directions, cost x 10, clipped
-  std::vector<float> best;            // per frame, the best explained share
-  std::vector<float> significance;    // per frame, FrameEvidence::significance
+  // Per direction the band around its predicted shadow boundaries: samples
+  // within band_steps grid steps of a neighbour (same group) of the other
+  // state; s when lit, ~s when in shade. Only the band is scored: a shadow
+  // is an edge, and a smooth gradient has no contrast across one.
+  std::vector<int32_t> band;
+  std::vector<int64_t> band_begin;  // size D + 1
+  // Right-hand grid neighbour of each sample in the same group (-1: none),
+  // for the noise of neighbouring differences.
+  std::vector<int32_t> right;
+  std::vector<float> reference;     // empty until SetReference
+  std::vector<uint8_t> scores;      // frames x directions, cost x 10, clipped
+  std::vector<float> best;          // per frame, the best explained share
+  std::vector<float> significance;  // per frame, FrameEvidence::significance
   int frames = 0;
   double build_seconds = 0.0;
 
@@ -163,6 +173,10 @@ struct SkyEvidence::Impl {
     const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
     std::vector<Eigen::Vector3f> origin, normal;
     std::map<std::tuple<int, int, int, int>, int> groups;
+    const int gw = (W - stride / 2 + stride - 1) / stride;
+    const int gh = (y1 - (y0 + stride / 2) + stride - 1) / stride;
+    std::vector<int32_t> cell(static_cast<size_t>(gw) * gh, -1);
+    std::vector<std::pair<int, int>> cells;
     const double bin = o.normal_bin_deg * kDeg;
     for (size_t i = 0; i < hits.object_id.size(); ++i) {
       if (!hits.hit(i)) continue;
@@ -181,6 +195,14 @@ struct SkyEvidence::Impl {
       auto it = groups.find(key);
       if (it == groups.end())
         it = groups.emplace(key, static_cast<int>(groups.size())).first;
+      const int cx = (static_cast<int>(px[2 * i]) - stride / 2) / stride;
+      const int cy =
+          (static_cast<int>(px[2 * i + 1]) - y0 - stride / 2) / stride;
+      if (cx >= 0 && cx < gw && cy >= 0 && cy < gh) {
+        cell[static_cast<size_t>(cy) * gw + cx] =
+            static_cast<int32_t>(pixels.size());
+      }
+      cells.emplace_back(cx, cy);
       pixels.emplace_back(float(px[2 * i]), float(px[2 * i + 1]));
       group.push_back(it->second);
       origin.push_back(p + lift * n);
@@ -194,28 +216,73 @@ struct SkyEvidence::Impl {
     for (int s = 0; s < s_count; ++s) {
       for (int k = 0; k < 3; ++k) flat[3 * s + k] = origin[s][k];
     }
-    std::vector<std::vector<int32_t>> per_direction(grid.size());
+    auto at = [&](int cx, int cy) -> int32_t {
+      if (cx < 0 || cy < 0 || cx >= gw || cy >= gh) return -1;
+      return cell[static_cast<size_t>(cy) * gw + cx];
+    };
+    right.assign(s_count, -1);
+    for (int i = 0; i < s_count; ++i) {
+      const int32_t j = at(cells[i].first + 1, cells[i].second);
+      if (j >= 0 && group[j] == group[i]) right[i] = j;
+    }
+    std::vector<std::vector<int32_t>> per_direction(grid.size()),
+        band_of(grid.size());
     const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
+    const int steps = o.band_steps;
     tbb::parallel_for(0, grid.size(), [&](int d) {
       const Eigen::Vector3f dir = grid.direction(d).cast<float>();
       std::vector<uint8_t> occluded(s_count);
       scene.OccludedToward(s_count, flat.data(), dir, 0.f, far,
                            occluded.data());
-      for (int s = 0; s < s_count; ++s) {
-        if (occluded[s] || normal[s].dot(dir) <= 0.02f)
-          per_direction[d].push_back(s);
+      std::vector<uint8_t> lit(s_count);
+      for (int i = 0; i < s_count; ++i) {
+        lit[i] = !occluded[i] && normal[i].dot(dir) > 0.02f;
+        if (!lit[i]) per_direction[d].push_back(i);
       }
+      // Boundary samples, then grown by `steps` grid steps within the group.
+      std::vector<int> dist(s_count, -1), queue;
+      for (int i = 0; i < s_count; ++i) {
+        const auto [cx, cy] = cells[i];
+        const int32_t nb[4] = {at(cx + 1, cy), at(cx - 1, cy), at(cx, cy + 1),
+                               at(cx, cy - 1)};
+        for (int32_t j : nb) {
+          if (j >= 0 && group[j] == group[i] && lit[j] != lit[i]) {
+            dist[i] = 0, queue.push_back(i);
+            break;
+          }
+        }
+      }
+      for (size_t q = 0; q < queue.size(); ++q) {
+        const int i = queue[q];
+        if (dist[i] >= steps) continue;
+        const auto [cx, cy] = cells[i];
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int32_t j = at(cx + dx, cy + dy);
+            if (j >= 0 && dist[j] < 0 && group[j] == group[i]) {
+              dist[j] = dist[i] + 1, queue.push_back(j);
+            }
+          }
+        }
+      }
+      for (int i : queue) band_of[d].push_back(lit[i] ? i : ~i);
     });
-    shaded_begin.assign(grid.size() + 1, 0);
-    for (int d = 0; d < grid.size(); ++d) {
-      shaded_begin[d + 1] =
-          shaded_begin[d] + static_cast<int64_t>(per_direction[d].size());
-    }
-    shaded.resize(shaded_begin.back());
-    for (int d = 0; d < grid.size(); ++d) {
-      std::copy(per_direction[d].begin(), per_direction[d].end(),
-                shaded.begin() + shaded_begin[d]);
-    }
+    auto flatten = [&](std::vector<std::vector<int32_t>>& lists,
+                       std::vector<int32_t>* flat_out,
+                       std::vector<int64_t>* begin) {
+      begin->assign(grid.size() + 1, 0);
+      for (int d = 0; d < grid.size(); ++d) {
+        (*begin)[d + 1] = (*begin)[d] + static_cast<int64_t>(lists[d].size());
+      }
+      flat_out->resize(begin->back());
+      for (int d = 0; d < grid.size(); ++d) {
+        std::copy(lists[d].begin(), lists[d].end(),
+                  flat_out->begin() + (*begin)[d]);
+        std::vector<int32_t>().swap(lists[d]);
+      }
+    };
+    flatten(per_direction, &shaded, &shaded_begin);
+    flatten(band_of, &band, &band_begin);
     build_seconds = Seconds(t0);
   }
 
@@ -390,88 +457,75 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
     out.message = "uniform where the model is seen";
     return keep();
   }
+  // Noise: the robust spread of differences between grid neighbours (a
+  // smooth gradient cancels in them; edges are few, the median ignores them).
+  std::vector<double> diffs;
+  diffs.reserve(S);
+  for (int i = 0; i < S; ++i) {
+    if (m.right[i] >= 0) diffs.push_back(std::abs(r[i] - r[m.right[i]]));
+  }
+  double noise = 1e-6;
+  if (!diffs.empty()) {
+    std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2,
+                     diffs.end());
+    const double sigma = 1.4826 * diffs[diffs.size() / 2] / std::sqrt(2.0);
+    noise = std::max(1e-6, sigma * sigma);
+  }
   const int min_side = m.o.min_side_samples;
   std::vector<float> rf(r.begin(), r.end());
+  std::vector<double> gain(D, 0.0);
   tbb::parallel_for(0, D, [&](int d) {
-    double n0[64], s0[64];
-    std::vector<double> n0v, s0v;
-    double* pn = n0;
-    double* ps = s0;
+    double buf[4 * 64];
+    std::vector<double> heap;
+    double* acc = buf;
     if (G > 64) {
-      n0v.assign(G, 0), s0v.assign(G, 0);
-      pn = n0v.data(), ps = s0v.data();
+      heap.assign(4 * static_cast<size_t>(G), 0.0);
+      acc = heap.data();
     } else {
-      std::fill(n0, n0 + G, 0.0), std::fill(s0, s0 + G, 0.0);
+      std::fill(buf, buf + 4 * G, 0.0);
     }
-    const int32_t* idx = m.shaded.data();
-    for (int64_t i = m.shaded_begin[d]; i < m.shaded_begin[d + 1]; ++i) {
-      const int32_t s = idx[i];
-      const int g = m.group[s];
-      pn[g] += 1, ps[g] += rf[s];
+    // acc[4g..4g+3]: lit count, lit sum, shade count, shade sum.
+    const int32_t* idx = m.band.data();
+    for (int64_t i = m.band_begin[d]; i < m.band_begin[d + 1]; ++i) {
+      const int32_t e = idx[i];
+      const bool is_lit = e >= 0;
+      const int32_t smp = is_lit ? e : ~e;
+      double* a = acc + 4 * m.group[smp] + (is_lit ? 0 : 2);
+      a[0] += 1, a[1] += rf[smp];
     }
-    // Explained variance of a two-level (lit/shaded) split per group, only
-    // where the predicted shade is darker than the predicted light.
-    double gain = 0;
+    // Between-sides sum of squares of the band, per group, only where the
+    // predicted shade is darker than the predicted light.
+    double g_sum = 0;
     for (int g = 0; g < G; ++g) {
-      const double b = pn[g], a = n_g[g] - pn[g];  // shaded, lit
-      if (a < min_side || b < min_side) continue;
-      const double mean_lit = (sum_g[g] - ps[g]) / a, mean_shade = ps[g] / b;
+      const double* a = acc + 4 * g;
+      if (a[0] < min_side || a[2] < min_side) continue;
+      const double mean_lit = a[1] / a[0], mean_shade = a[3] / a[2];
       if (mean_shade >= mean_lit) continue;
-      const double between =
-          a * b / n_g[g] * (mean_lit - mean_shade) * (mean_lit - mean_shade);
-      gain += between;
+      const double diff = mean_lit - mean_shade;
+      g_sum += a[0] * a[2] / (a[0] + a[2]) * diff * diff;
     }
-    explained[d] = static_cast<float>(gain / total);
+    gain[d] = g_sum;
+    explained[d] = static_cast<float>(g_sum / total);
   });
-  const int best = static_cast<int>(
-      std::max_element(explained.begin(), explained.end()) - explained.begin());
+  const int best = static_cast<int>(std::max_element(gain.begin(), gain.end()) -
+                                    gain.begin());
   out.best_direction = best;
   out.best_explained = explained[best];
-  // Costs in units of log-likelihood: the variance a direction leaves
-  // unexplained beyond the best one, over the per-sample noise left by the
-  // best one, divided by the samples per independent observation
-  // (neighbouring samples share texture, blur and the model's misfit).
-  // The noise is the residuals' robust spread (1.4826 MAD): engraved lines,
-  // compression and a pixel of camera shake give heavy tails that would
-  // otherwise drown a thin shadow's evidence.
-  std::vector<double> level_lit(G, 0), level_shade(G, 0), count_shade(G, 0);
-  std::vector<uint8_t> shaded_best(S, 0);
-  for (int64_t i = m.shaded_begin[best]; i < m.shaded_begin[best + 1]; ++i) {
-    shaded_best[m.shaded[i]] = 1;
-  }
-  for (int s = 0; s < S; ++s) {
-    const int g = m.group[s];
-    if (shaded_best[s]) {
-      level_shade[g] += r[s], count_shade[g] += 1;
-    } else {
-      level_lit[g] += r[s];
-    }
-  }
-  std::vector<double> residual(S);
-  for (int s = 0; s < S; ++s) {
-    const int g = m.group[s];
-    const double lit_n = n_g[g] - count_shade[g];
-    const double level = shaded_best[s]
-                             ? level_shade[g] / std::max(1.0, count_shade[g])
-                             : level_lit[g] / std::max(1.0, lit_n);
-    residual[s] = std::abs(r[s] - level);
-  }
-  std::nth_element(residual.begin(), residual.begin() + S / 2, residual.end());
-  const double mad = 1.4826 * residual[S / 2];
-  const double noise = std::max(1e-9, std::min(total * (1.0 - explained[best]) /
-                                                   std::max(1.0, S - 2.0 * G),
-                                               mad * mad));
-  const double scale = total / noise / (2.0 * m.o.samples_per_observation);
+  // Costs in units of log-likelihood: the band contrast a direction lacks
+  // against the best one, over the noise, divided by the samples per
+  // independent observation (neighbours share texture, blur, the model's
+  // misfit).
+  const double scale = 1.0 / noise / (2.0 * m.o.samples_per_observation);
   for (int d = 0; d < D; ++d)
-    cost[d] = static_cast<float>((explained[best] - explained[d]) * scale);
+    cost[d] = static_cast<float>((gain[best] - gain[d]) * scale);
   const double cos_x = std::cos(m.o.rival_exclusion_deg * kDeg);
-  float rival = 0.f;
+  double rival = 0.0;
   for (int d = 0; d < D; ++d) {
     if (m.grid.direction(d).dot(m.grid.direction(best)) < cos_x)
-      rival = std::max(rival, explained[d]);
+      rival = std::max(rival, gain[d]);
   }
-  out.margin = (explained[best] - rival) * scale;
-  out.significance = explained[best] * scale;
+  out.margin = (gain[best] - rival) * scale;
+  out.significance = gain[best] * scale;
   out.status = out.significance >= m.o.min_significance
                    ? FrameEvidence::Status::kOk
                    : FrameEvidence::Status::kNoShadows;

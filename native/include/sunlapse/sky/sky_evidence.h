@@ -75,9 +75,12 @@ struct SkyEvidenceOptions {
   int ignore_bottom_rows = 0;
   // Samples are grouped into planes by object and normal within this (deg).
   double normal_bin_deg = 12.0;
-  // A group scores only with at least this many samples on each side of a
-  // candidate's lit/shaded split (fewer are noise).
-  int min_side_samples = 6;
+  // Only samples within this many grid steps of a candidate's predicted
+  // shadow boundary are scored (the band); the boundary itself is step 0.
+  int band_steps = 2;
+  // A group scores only with at least this many band samples on each side of
+  // a candidate's lit/shaded split (fewer are noise).
+  int min_side_samples = 3;
   // Intensity / reference ratios are clipped to [0, max_ratio] (specular
   // glints, unmodelled objects).
   double max_ratio = 2.0;
