@@ -30,9 +30,11 @@ import numpy as np
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
 REFERENCE_FRAMES = 24
-# A refined Sun further than this many grid spacings from the path's
-# direction is not believed (the tracker locked onto something else).
-REFINE_MAX_SPACINGS = 2.5
+# A refined Sun further than this from the path's direction is not believed
+# (the tracker locked onto something else); the path's own direction is a
+# grid cell that the evidence's ridge along the shadows can leave a few
+# degrees off.
+REFINE_MAX_DEG = 8.0
 # Confidence of a frame grows with the chosen path's lead over the best path
 # through a direction well away from it on that frame (log-likelihood units,
 # see sun_path.h; the frame's own evidence and its neighbours'): full at this
@@ -179,7 +181,9 @@ def estimate(native, scene, camera, frames: Sequence[int],
     result.evidence = {"explained": [round(float(v), 3) for v in path["explained"]],
                        "margin": [round(float(v), 2) for v in margins],
                        "significance": [round(float(v), 1) for v in path["significance"]],
-                       "path_margin": [round(float(v), 1) for v in path["path_margin"]]}
+                       "path_margin": [round(float(v), 1) for v in path["path_margin"]],
+                       "path_world_deg": [[round(v, 2) for v in angles_of(directions[d])]
+                                          for d in path["direction"]]}
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None
 
@@ -221,7 +225,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
                 for attempt in ("own", "path") if follow else ("path",):
                     r = tracker.track(gray) if attempt == "own" else tracker.track_toward(gray, d)
                     track_seconds += r.seconds
-                    if r.ok and _angle_deg(r.sun_in_world, d) <= REFINE_MAX_SPACINGS * spacing:
+                    if r.ok and _angle_deg(r.sun_in_world, d) <= REFINE_MAX_DEG:
                         refined = r
                         break
             follow = refined is not None

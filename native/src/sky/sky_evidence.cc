@@ -42,12 +42,20 @@ SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
   // Solid angle per direction -> the side of a square of that area.
   const double solid = 2.0 * M_PI * (1.0 - zmin) / num_directions;
   spacing_deg_ = std::sqrt(solid) / kDeg;
-  cached_radius_deg_ = 3.0 * spacing_deg_;
+  // Path steps of up to ~20 deg (a generous per-frame bound plus the
+  // grid's slack) are looked up, not scanned.
+  cached_radius_deg_ = std::max(3.0 * spacing_deg_, 22.0);
   cached_.resize(directions_.size());
   const double cos_r = std::cos(cached_radius_deg_ * kDeg);
   tbb::parallel_for(0, size(), [&](int i) {
     for (int j = 0; j < size(); ++j) {
-      if (directions_[i].dot(directions_[j]) >= cos_r) cached_[i].push_back(j);
+      const double c = directions_[i].dot(directions_[j]);
+      if (c >= cos_r) {
+        cached_[i].push_back(
+            {j, static_cast<float>(
+                    std::atan2(directions_[i].cross(directions_[j]).norm(), c) /
+                    kDeg)});
+      }
     }
   });
 }
@@ -56,8 +64,8 @@ std::vector<int> SkyGrid::Within(int i, double radius_deg) const {
   std::vector<int> out;
   const double cos_r = std::cos(std::min(radius_deg, 180.0) * kDeg);
   if (radius_deg <= cached_radius_deg_) {
-    for (int j : cached_[i]) {
-      if (directions_[i].dot(directions_[j]) >= cos_r) out.push_back(j);
+    for (const Neighbour& nb : cached_[i]) {
+      if (nb.angle_deg <= radius_deg) out.push_back(nb.index);
     }
     return out;
   }

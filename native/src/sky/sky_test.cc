@@ -120,6 +120,10 @@ TEST(SkyEvidence, BlackAndMissingFramesAreReportedNotScored) {
                std::invalid_argument);
 }
 
+// The path is the grid's: within reach of the tracker's refinement, which
+// the whole-clip controller accepts up to 8 deg from the path.
+constexpr double kPathToleranceDeg = 8.0;
+
 double PathError(const SkyEvidence& ev, const SunPathResult& path,
                  const std::vector<Eigen::Vector3d>& truth, size_t t) {
   return AngleBetweenDeg(ev.grid().direction(path.direction[t]), truth[t]);
@@ -139,7 +143,7 @@ TEST(SunPath, BrokenFramesAreCarriedByTheirNeighbours) {
   }
   const SunPathResult path = SolveSunPath(ev, {}, {}, SunPathOptions());
   ASSERT_EQ(path.status, SunPathResult::Status::kSuccess) << path.message;
-  const double tolerance = 2.0 * ev.grid().spacing_deg();
+  const double tolerance = kPathToleranceDeg;
   for (int f = 0; f < n; ++f) {
     const bool bad = std::find(broken.begin(), broken.end(), f) != broken.end();
     EXPECT_LT(PathError(ev, path, clip.truth, f),
@@ -166,7 +170,7 @@ TEST(SunPath, ALoopedClipJumpsOnceAndStaysRightOnBothSides) {
   ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
   // The grid's ~4 deg cells: a frame's evidence may peak a cell off the truth
   // along its shadows' ambiguous direction (refinement is the tracker's).
-  const double tolerance = 2.0 * ev.grid().spacing_deg();
+  const double tolerance = kPathToleranceDeg;
   int jumps = 0;
   for (int t = 0; t < 2 * n; ++t) {
     EXPECT_LT(PathError(ev, path, truth, t), tolerance) << "frame " << t;
@@ -190,7 +194,7 @@ TEST(SunPath, KnownTimesBoundTheStepAndSegmentsRestart) {
   ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
   EXPECT_TRUE(path.jump_before[8]);
   for (int t = 0; t < n; ++t) {
-    EXPECT_LT(PathError(ev, path, clip.truth, t), 2.0 * ev.grid().spacing_deg())
+    EXPECT_LT(PathError(ev, path, clip.truth, t), kPathToleranceDeg)
         << "frame " << t;
   }
   EXPECT_THROW(SolveSunPath(ev, {1.0}, {}, SunPathOptions()),

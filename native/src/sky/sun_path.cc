@@ -98,13 +98,22 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       if (hard) {
         c = in_min, arg = in_arg;
       } else {
-        for (int p : grid.Within(d, r)) {
-          const double ang =
-              std::acos(std::clamp(grid.direction(p).dot(grid.direction(d)),
-                                   -1.0, 1.0)) /
-              kDeg;
-          const double step = in[p] + o.step_weight * (ang / r) * (ang / r);
-          if (step < c) c = step, arg = p;
+        if (r <= grid.cached_radius_deg()) {
+          for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
+            if (nb.angle_deg > r) continue;
+            const double q = nb.angle_deg / r;
+            const double step = in[nb.index] + o.step_weight * q * q;
+            if (step < c) c = step, arg = nb.index;
+          }
+        } else {
+          for (int p : grid.Within(d, r)) {
+            const double ang =
+                std::acos(std::clamp(grid.direction(p).dot(grid.direction(d)),
+                                     -1.0, 1.0)) /
+                kDeg;
+            const double step = in[p] + o.step_weight * (ang / r) * (ang / r);
+            if (step < c) c = step, arg = p;
+          }
         }
         if (o.jump_cost >= 0 && in_min + o.jump_cost < c) {
           c = in_min + o.jump_cost, arg = in_arg, jump = true;

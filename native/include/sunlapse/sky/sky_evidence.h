@@ -52,6 +52,14 @@ class SkyGrid {
   // Indices within radius_deg of direction i (i included), from a cached
   // list when radius_deg <= the cache's radius, else by a scan.
   std::vector<int> Within(int i, double radius_deg) const;
+  // Neighbours within radius_deg of i with their angles (deg), from the
+  // cache (radius_deg must not exceed cached_radius_deg()).
+  struct Neighbour {
+    int index;
+    float angle_deg;
+  };
+  const std::vector<Neighbour>& Cached(int i) const { return cached_[i]; }
+  double cached_radius_deg() const { return cached_radius_deg_; }
   // Index of the grid direction closest to `d`.
   int Nearest(const Eigen::Vector3d& d) const;
 
@@ -59,13 +67,13 @@ class SkyGrid {
   std::vector<Eigen::Vector3d> directions_;
   double spacing_deg_ = 0.0;
   double cached_radius_deg_ = 0.0;
-  std::vector<std::vector<int>> cached_;
+  std::vector<std::vector<Neighbour>> cached_;
 };
 
 struct SkyEvidenceOptions {
   // Sky directions scored per frame. 1200 gives ~4.5 deg spacing; the path is
   // refined to sub-degree afterwards by the shadow tracker.
-  int num_directions = 1200;
+  int num_directions = 3000;
   // Directions lower than this are not candidates (deg from the zenith).
   double max_zenith_deg = 88.0;
   // Surface samples at most (a regular pixel grid over what the model covers).
