@@ -12,18 +12,38 @@ from . import ar, bridge, lamp, native_loader, pipeline, results
 from .core import frametimes, trackfile
 
 
-def ground_names(settings):
-    return [n.strip() for n in settings.ground_objects.split(",") if n.strip()]
+def ground_names(settings, model=None):
+    """The picked Ground object and any more named in Other Ground; with the
+    model given, names match its objects whatever their case (raises
+    bridge.SceneError naming one that matches none)."""
+    names = [settings.ground_object.name] if settings.ground_object is not None else []
+    names += [n.strip() for n in settings.ground_objects.split(",") if n.strip()]
+    if model is None:
+        return names
+    by_lower = {n.lower(): n for n in model.names}
+    out = []
+    for n in names:
+        match = n if n in model.names else by_lower.get(n.lower())
+        if match is None:
+            raise bridge.SceneError(f"Ground: '{n}' is not an object of the model "
+                                    f"(model objects: {', '.join(model.names[:8])}"
+                                    f"{' ...' if len(model.names) > 8 else ''})")
+        if match not in out:
+            out.append(match)
+    return out
 
 
 def gather_all(context, settings=None, movieclip=None, collection=None,
                camera_obj=None):
-    """Model, camera and clip of the current scene; raises bridge.SceneError."""
+    """Model, camera and clip of the current scene; raises bridge.SceneError.
+    AR inserts are never part of the model (with Model empty, every visible
+    mesh would otherwise count)."""
     settings = settings or context.scene.sunlapse
     clip = bridge.gather_clip(context, movieclip)
     clip_obj = movieclip or bridge.active_movieclip(context)
     cam = bridge.gather_camera(context, camera_obj or settings.camera, clip, clip_obj)
-    model = bridge.gather_model(context, collection or settings.model_collection)
+    model = bridge.gather_model(context, collection or settings.model_collection,
+                                exclude=ar.insert_names())
     return model, cam, clip
 
 
@@ -48,7 +68,7 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             return {"CANCELLED"}
         for w in cam.warnings:
             self.report({"WARNING"}, w)
-        ground = ground_names(settings) or bridge.guess_ground(model)
+        ground = ground_names(settings, model) or bridge.guess_ground(model)
         msg = (f"{model.num_triangles} triangles in {len(model.names)} objects "
                f"(gathered in {t1 - t0:.2f} s, BVH {t2 - t1:.2f} s); camera "
                f"'{cam.name}'; clip '{clip.name}' {clip.width}x{clip.height}, "
@@ -127,7 +147,7 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
     settings = settings or context.scene.sunlapse
     native_loader.require()
     model, cam, clip = gather_all(context, settings, collection=collection)
-    names = ground or ground_names(settings) or bridge.guess_ground(model)
+    names = ground or ground_names(settings, model) or bridge.guess_ground(model)
     missing = [g for g in names if g not in model.names]
     if missing:
         raise bridge.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")
