@@ -24,6 +24,9 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 # The sample insert is scaled up so its shadow covers enough pixels of a
 # tiny (128x96) render to measure.
 INSERT_SCALE = 3.0
+# The insert's shadow: where the catcher keeps less than this (its sky
+# occlusion darkens the ground around it by a few percent, not a shadow).
+CATCHER_SHADOW = 0.85
 
 
 def _load_exr(path):
@@ -87,7 +90,7 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
 
     # The insert's shadow: where the catcher darkens and no insert covers.
     free = alpha < 0.01
-    shade = (catcher < 0.97) & free
+    shade = (catcher < CATCHER_SHADOW) & free
     core = arlight.erode(shade, 1) if arlight.erode(shade, 1).sum() >= 6 else shade
     insert_ratio = np.median(comp[core] / np.maximum(plate[core], 1e-6), axis=0)
 
@@ -104,7 +107,7 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
         t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
     ground, _ = acquire.ground_and_model_shadow(bridge.build_scene(model), bridge.build_camera(cam),
                                                 ids, sun)
-    ground = (ground > 0) & arlight.dilate(free & (catcher > 0.97), 0) & ~arlight.dilate(shade, 2)
+    ground = (ground > 0) & free & ~arlight.dilate(shade, 1)
     dark = arlight.erode(real_shadow, 1) & ground
     band = max(4, round(ground.shape[1] / 25))
     lit = arlight.dilate(real_shadow, band) & ~arlight.dilate(real_shadow, 2) & ground
