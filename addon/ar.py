@@ -171,8 +171,14 @@ def measure_balance(context, track, frames):
                                                          settings.ignore_top_rows)
         rgb = arlight.srgb_to_linear(bgr[..., ::-1] / 255.0)
         bal = arlight.measure_shadow_balance(rgb, ground > 0, shadow > 0)
-        if bal is not None:
-            out.append((f, est.zenith_deg, bal))
+        if bal is None:
+            continue
+        seen = []
+        for mask in (bal.shadow_mask, bal.lit_mask):
+            rows, cols = np.nonzero(mask)
+            _, origins = acquire.ground_samples(scene_n, camera_n, ids, rows, cols)
+            seen.append(arlight.sky_seen(origins, lambda o, d: scene_n.occluded(o, d)))
+        out.append((f, est.zenith_deg, bal, seen[0], seen[1]))
     return out
 
 
@@ -185,8 +191,17 @@ def key_light(context, sun_obj, balances):
     _clear_keys(data, {"energy", "color"})
     _clear_keys(world.node_tree, {f'nodes["{bg.name}"].inputs[0].default_value',
                                   f'nodes["{bg.name}"].inputs[1].default_value'})
-    for f, zenith, bal in balances:
-        sun_rgb, sky_rgb = arlight.sun_and_sky(bal.shadow_ratio, bal.lit_linear, zenith)
+    # One Sun-to-sky balance for the clip (the median of the frames'): a
+    # few frames' shadows are too few pixels to key each on its own; the
+    # shadow ratio still follows the Sun's height frame by frame.
+    k = np.median([arlight.sun_to_sky(b.shadow_ratio, zenith, vs, vl)
+                   for _, zenith, b, vs, vl in balances], axis=0)
+    vs = float(np.median([b[3] for b in balances]))
+    vl = float(np.median([b[4] for b in balances]))
+    for f, zenith, bal, _, _ in balances:
+        ratio = arlight.ratio_for(k, zenith, vs, vl)
+        sun_rgb, sky_rgb = arlight.sun_and_sky(ratio, bal.lit_linear, zenith,
+                                               sky_seen_in_shadow=vs, sky_seen_lit=vl)
         strength, color = arlight.as_strength_and_color(sun_rgb)
         data.energy, data.color = strength, color
         data.keyframe_insert("energy", frame=f)
@@ -278,8 +293,10 @@ def setup(context, add_sample_object=True, balance=True, preview=True):
         if track is not None:
             results.apply_track(context, track, sun, sync_sky=False)
         ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
+        seen = np.mean([b[3] for b in balances])
         light = (f"; light from the footage's shadows on {len(balances)} frame(s): shadow/lit "
-                 f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f}")
+                 f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear; their casters "
+                 f"hide {100 * (1 - seen):.0f}% of the sky)")
     elif balance:
         light = "; no real shadow measurable in the footage: lamp and sky left as they were"
         if scene.world is None:

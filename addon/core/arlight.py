@@ -67,6 +67,8 @@ class ShadowBalance:
     lit_linear: Tuple[float, float, float]     # lit ground's median, linear R, G, B
     shadow_pixels: int
     lit_pixels: int
+    shadow_mask: Optional[np.ndarray] = None   # the pixels measured, H x W bool
+    lit_mask: Optional[np.ndarray] = None
 
 
 def measure_shadow_balance(rgb_linear: np.ndarray, ground: np.ndarray, shadow: np.ndarray,
@@ -83,33 +85,115 @@ def measure_shadow_balance(rgb_linear: np.ndarray, ground: np.ndarray, shadow: n
     shadow = shadow.astype(bool) & ground
     margin = max(1, round(w / 400))
     band = band_px if band_px is not None else max(4, round(w / 25))
-    core = erode(shadow, margin) & erode(ground, margin)
+    # Wide shadows first: thin ones (a fence's bars, a pole's) are mostly
+    # edge pixels, part lit, at small sizes.
+    for m in (3 * margin, 2 * margin, margin):
+        core = erode(shadow, m) & erode(ground, margin)
+        if core.sum() >= 4 * MIN_PIXELS:
+            break
     near = dilate(shadow, band) & ~dilate(shadow, margin + 1) & erode(ground, margin)
     if core.sum() < MIN_PIXELS or near.sum() < MIN_PIXELS:
         return None
+    # A Sun a little off, or a shadow the model does not cast, puts lit
+    # pixels among the predicted shadow and dark ones beside it: each side
+    # keeps only the pixels on its side of the threshold halfway (in log)
+    # between the two first medians.
+    lum_all = rgb_linear.mean(axis=2)
+    for _ in range(2):
+        d, l = np.median(lum_all[core]), np.median(lum_all[near])
+        if not (0 < d < l):
+            break
+        t = math.sqrt(d * l)
+        core2, near2 = core & (lum_all < t), near & (lum_all >= t)
+        if core2.sum() < MIN_PIXELS or near2.sum() < MIN_PIXELS:
+            break
+        core, near = core2, near2
     dark = np.median(rgb_linear[core], axis=0)
     lit = np.median(rgb_linear[near], axis=0)
     if np.any(lit <= 1e-6):
         return None
     ratio = np.clip(dark / lit, MIN_RATIO, MAX_RATIO)
     return ShadowBalance(tuple(float(x) for x in ratio), tuple(float(x) for x in lit),
-                         int(core.sum()), int(near.sum()))
+                         int(core.sum()), int(near.sum()), core, near)
 
 
 def sun_and_sky(shadow_ratio: Sequence[float], lit_linear: Sequence[float], zenith_deg: float,
-                ground_albedo: float = GROUND_ALBEDO):
-    """(Sun irradiance RGB, sky radiance RGB) that give a horizontal ground
-    `shadow_ratio` in a hard shadow and light it as bright as the plate's lit
-    ground (for an albedo of `ground_albedo`):
-        pi W / (S cos z + pi W) = ratio,   S cos z + pi W = pi lit / albedo."""
+                ground_albedo: float = GROUND_ALBEDO, sky_seen_in_shadow: float = 1.0,
+                sky_seen_lit: float = 1.0):
+    """(Sun irradiance RGB, sky radiance RGB) that reproduce the footage's
+    `shadow_ratio` on horizontal ground and light it as bright as the
+    plate's lit ground (for an albedo of `ground_albedo`).
+
+    The real shadows lie beside their casters, which hide part of the sky
+    from them (`sky_seen_in_shadow`, cosine-weighted, 0..1; the lit ground
+    beside them sees `sky_seen_lit`); an insert hides the sky from its own
+    shadow the same way when rendered, so that share is taken out here:
+        ratio = Vs x / (1 + Vl x),  x = pi W / (S cos z)
+        S cos z + Vl pi W = pi lit / albedo."""
     cos_z = max(0.05, math.cos(math.radians(zenith_deg)))  # grazing Sun: bounded
+    vs = min(1.0, max(0.2, sky_seen_in_shadow))
+    vl = min(1.0, max(vs, sky_seen_lit))
     sun, sky = [], []
     for r, lit in zip(shadow_ratio, lit_linear):
-        r = min(MAX_RATIO, max(MIN_RATIO, r))
+        r = min(MAX_RATIO * vs / vl, max(MIN_RATIO, r))
+        x = r / max(1e-6, vs - r * vl)
         irradiance = math.pi * lit / ground_albedo
-        sky.append(r * irradiance / math.pi)
-        sun.append((1.0 - r) * irradiance / cos_z)
+        direct = irradiance / (1.0 + vl * x)           # S cos z
+        sun.append(direct / cos_z)
+        sky.append(x * direct / math.pi)               # W
     return tuple(sun), tuple(sky)
+
+
+def sun_to_sky(shadow_ratio: Sequence[float], zenith_deg: float, sky_seen_in_shadow: float = 1.0,
+               sky_seen_lit: float = 1.0):
+    """The Sun's irradiance over the unoccluded sky's (S / pi W, per
+    channel) behind a measured shadow ratio (see sun_and_sky): unlike the
+    ratio it does not change with the Sun's height, so frames pool it."""
+    cos_z = max(0.05, math.cos(math.radians(zenith_deg)))
+    vs = min(1.0, max(0.2, sky_seen_in_shadow))
+    vl = min(1.0, max(vs, sky_seen_lit))
+    out = []
+    for r in shadow_ratio:
+        r = min(MAX_RATIO * vs / vl, max(MIN_RATIO, r))
+        out.append(max(1e-6, vs - r * vl) / r / cos_z)
+    return tuple(out)
+
+
+def ratio_for(sun_to_sky_rgb: Sequence[float], zenith_deg: float, sky_seen_in_shadow: float = 1.0,
+              sky_seen_lit: float = 1.0):
+    """The shadow ratio a Sun-to-sky balance gives at `zenith_deg`."""
+    cos_z = max(0.05, math.cos(math.radians(zenith_deg)))
+    out = []
+    for k in sun_to_sky_rgb:
+        x = 1.0 / (k * cos_z)
+        out.append(sky_seen_in_shadow * x / (1.0 + sky_seen_lit * x))
+    return tuple(out)
+
+
+def cosine_directions(n: int = 64) -> np.ndarray:
+    """n unit directions over the upper hemisphere, spread evenly in the
+    cosine-weighted measure (a Fibonacci spiral): the fraction not blocked
+    is the share of a uniform sky's light a horizontal point gets."""
+    k = np.arange(n) + 0.5
+    r = np.sqrt(k / n)                      # disc radius, uniform in area
+    phi = k * math.pi * (3.0 - math.sqrt(5.0))
+    z = np.sqrt(np.maximum(0.0, 1.0 - r * r))
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1).astype(np.float32)
+
+
+def sky_seen(origins: np.ndarray, occluded, n: int = 64, max_points: int = 1500,
+             seed: int = 0) -> float:
+    """Mean cosine-weighted sky visibility of `origins` (M x 3, lifted off
+    the ground); `occluded(origins, directions) -> bool array` casts rays."""
+    if len(origins) == 0:
+        return 1.0
+    if len(origins) > max_points:
+        pick = np.random.default_rng(seed).choice(len(origins), max_points, replace=False)
+        origins = origins[pick]
+    dirs = cosine_directions(n)
+    o = np.ascontiguousarray(np.repeat(origins.astype(np.float32), n, axis=0))
+    d = np.ascontiguousarray(np.tile(dirs, (len(origins), 1)))
+    return float(1.0 - np.mean(occluded(o, d)))
 
 
 def as_strength_and_color(rgb: Sequence[float]):
