@@ -294,7 +294,7 @@ def report_level(track):
 
 # The one Estimate Sun run of this Blender session (a second would race the
 # first for the stored track): the panels and the status bar read it.
-RUN = {"running": False, "fraction": 0.0, "cancel": False}
+RUN = {"running": False, "fraction": 0.0, "cancel": False, "outcome": None, "drawn": 0}
 
 
 def _redraw_all():
@@ -311,6 +311,7 @@ def draw_status_progress(self, context):
     own jobs."""
     if not RUN["running"]:
         return
+    RUN["drawn"] += 1  # the UI tests check the bar was drawn during a run
     row = self.layout.row(align=True)
     text = "Cancelling the Sun estimate" if RUN["cancel"] else "Estimating the Sun"
     if hasattr(row, "progress"):
@@ -380,7 +381,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             return self.execute(context)
         if not self._prepare(context):
             return {"CANCELLED"}
-        RUN.update(running=True, fraction=0.0, cancel=False)
+        RUN.update(running=True, fraction=0.0, cancel=False, outcome=None)
         self._result = None
         self._error = None
 
@@ -423,19 +424,26 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             return {"RUNNING_MODAL"} if event.type == "ESC" else {"PASS_THROUGH"}
         pct = int(100 * RUN["fraction"])
         context.window_manager.progress_update(pct)
+        if context.workspace:  # the status bar shows the bar and a cancel button
+            context.workspace.status_text_set(draw_status_progress)
         _redraw_all()
         if self._thread.is_alive():
             return {"PASS_THROUGH"}
         self._end(context)
-        if RUN["cancel"] or (isinstance(self._error, pipeline.PipelineError)
-                             and str(self._error) == "cancelled"):
-            self.report({"INFO"}, "Estimate cancelled; nothing was changed")
-            return {"CANCELLED"}
-        if self._error is not None:
+        stopped = isinstance(self._error, pipeline.PipelineError) and str(self._error) == "cancelled"
+        if self._error is not None and not stopped:
+            RUN["outcome"] = f"failed: {type(self._error).__name__}: {self._error}"
             self.report({"ERROR"}, f"Estimate failed: {self._error}")
             context.scene.sunlapse.last_report = f"Estimate failed: {self._error}"
             return {"CANCELLED"}
+        if stopped or RUN["cancel"]:
+            # stopped: the worker saw the cancel and gave up; else it had
+            # finished already and its result is dropped.
+            RUN["outcome"] = "cancelled" if stopped else "cancelled after the run ended"
+            self.report({"INFO"}, "Estimate cancelled; nothing was changed")
+            return {"CANCELLED"}
         _, _, clip, _, _, extra = self._job
+        RUN["outcome"] = "finished"
         self.report(report_level(self._result), finish_run(context, self._result, clip, extra))
         return {"FINISHED"}
 

@@ -7,22 +7,41 @@ column of their own (use_property_split), short enough for the default
 sidebar width.
 """
 
-import textwrap
-
 import bpy
 
 from . import native_loader
 
 
+def _wrap(text, width_px, measure):
+    """Words of `text` in lines no wider than width_px by `measure`."""
+    lines, line = [], ""
+    for word in text.split():
+        trial = f"{line} {word}" if line else word
+        if line and measure(trial) > width_px:
+            lines.append(line)
+            line = word
+        else:
+            line = trial
+    if line:
+        lines.append(line)
+    return lines
+
+
 def wrapped(layout, context, text, icon="NONE", max_lines=6):
-    """A long message as several labels, cut at the region's width (a single
-    label would be cut after a few words)."""
+    """A long message as several labels, broken at the panel's width (a
+    single label would be cut after a few words)."""
+    import blf
     region = getattr(context, "region", None)
-    width = region.width if region is not None else 300
     scale = context.preferences.system.ui_scale
-    chars = max(20, int((width - 30 * scale) / (6.2 * scale)))
+    width = (region.width if region is not None else 300) - 72 * scale \
+        - (20 * scale if icon != "NONE" else 0)
+    size = context.preferences.ui_styles[0].widget_label.points * scale
+    if bpy.app.version >= (4, 0, 0):
+        blf.size(0, size)
+    else:
+        blf.size(0, size, 72)
+    lines = _wrap(text, width, lambda t: blf.dimensions(0, t)[0])
     col = layout.column(align=True)
-    lines = textwrap.wrap(text, chars)
     for k, line in enumerate(lines[:max_lines]):
         if k == max_lines - 1 and len(lines) > max_lines:
             line = line[:-3] + "..."
@@ -89,7 +108,7 @@ def draw_progress(layout):
     if hasattr(row, "progress"):
         row.progress(factor=run["fraction"], type="BAR", text=text)
     else:
-        row.label(text=text + " (Esc cancels)", icon="TIME")
+        row.label(text=text, icon="TIME")
     row.operator("clip.sunlapse_cancel", text="", icon="CANCEL")
 
 
@@ -109,7 +128,12 @@ class _Sub(_Panel):
         return _Panel.poll.__func__(cls, context) and native_loader._native is not None
 
 
+# Draws of the parent panel per space type (the UI tests wait for it).
+DRAWN = {}
+
+
 def draw_main(self, context):
+    DRAWN[self.bl_space_type] = DRAWN.get(self.bl_space_type, 0) + 1
     layout = self.layout
     if native_loader._native is None:
         box = layout.box()
@@ -130,8 +154,8 @@ def draw_scene(self, context):
     col.prop(s, "model_collection")
     col.prop(s, "camera")
     col.prop(s, "ground_object")
-    col.prop(s, "ground_objects", text="More Ground")
-    col.prop(s, "ignore_top_rows", text="Skip Top Rows")
+    col.prop(s, "ground_objects", text="Others")
+    col.prop(s, "ignore_top_rows", text="Top Rows")
     col = layout.column(align=True)
     col.operator("clip.sunlapse_solve_camera", text="Solve Camera", icon="CAMERA_DATA")
     col.operator("clip.sunlapse_check_scene", icon="CHECKMARK")
@@ -248,17 +272,4 @@ classes = _make_classes()
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 
-def register():
-    _register()
-    from . import operators
-    # The status bar shows a running estimate (progress and cancel).
-    bpy.types.STATUSBAR_HT_header.prepend(operators.draw_status_progress)
-
-
-def unregister():
-    from . import operators
-    try:
-        bpy.types.STATUSBAR_HT_header.remove(operators.draw_status_progress)
-    except ValueError:
-        pass
-    _unregister()
+register, unregister = _register, _unregister

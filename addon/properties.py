@@ -57,7 +57,7 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         default="default")
     ignore_top_rows: IntProperty(
         name="Ignore Top Rows", min=0, default=0,
-        description="Rows at the top of the frame that are not scene content "
+        description="Rows at the top of the frame to ignore: not scene content "
                     "(burned-in time stamps, banners)")
     smoothing: EnumProperty(
         name="Smoothing",
