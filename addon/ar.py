@@ -27,6 +27,9 @@ WORLD_NAME = "sunlapse sky"
 # Frames of the clip measured for the light balance (spread over it).
 BALANCE_FRAMES = 5
 AR_KEYS_PROP = "sunlapse_ar_frames"
+# Real shadows that see less of the sky than this are indoors or walled in:
+# their light is bounced, which the open-sky balance does not model.
+ENCLOSED_SKY_SEEN = 0.5
 
 
 def is_insert(obj) -> bool:
@@ -234,8 +237,9 @@ def preview_in_viewports(context, camera_obj):
     return n
 
 
-def setup(context, add_sample_object=True, balance=True, preview=True):
-    """Configures the scene for AR renders; returns a one-line summary."""
+def setup(context, add_sample_object=True, balance=True, preview=True, warnings=None):
+    """Configures the scene for AR renders; returns a one-line summary.
+    Warnings go to `warnings` (a list) when given, else into the summary."""
     scene = context.scene
     settings = scene.sunlapse
     sun = settings.sun_lamp
@@ -297,6 +301,13 @@ def setup(context, add_sample_object=True, balance=True, preview=True):
         light = (f"; light from the footage's shadows on {len(balances)} frame(s): shadow/lit "
                  f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear; their casters "
                  f"hide {100 * (1 - seen):.0f}% of the sky)")
+        if seen < ENCLOSED_SKY_SEEN:
+            note = ("the footage's shadows are enclosed (a room?): the light of an open sky is "
+                    "assumed and the inserts' shadows will come out too dark")
+            if warnings is None:
+                light += ". Warning: " + note
+            else:
+                warnings.append(note)
     elif balance:
         light = "; no real shadow measurable in the footage: lamp and sky left as they were"
         if scene.world is None:

@@ -539,11 +539,14 @@ class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            note = ar.setup(context, add_sample_object=self.add_sample_object)
+            warnings = []
+            note = ar.setup(context, add_sample_object=self.add_sample_object, warnings=warnings)
         except (bridge.SceneError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         self.report({"INFO"}, note)
+        for w in warnings:
+            self.report({"WARNING"}, w)
         return {"FINISHED"}
 
 
@@ -710,6 +713,11 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         cam.lens = r["focal_px"] * 36.0 / (w if w >= h else h)
         from mathutils import Matrix
         cam_obj.matrix_world = Matrix([list(row) for row in r["matrix_world"]])
+        # The clip's own tracking camera too, as Blender's solver fills it.
+        tc = clip.tracking.camera
+        tc.sensor_width = 36.0
+        tc.units = "MILLIMETERS"
+        tc.focal_length = cam.lens
         scene.render.resolution_x, scene.render.resolution_y = w, h
         scene.render.resolution_percentage = 100
         scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
