@@ -12,6 +12,7 @@ and as blue, as the real ones beside them.
 """
 
 import math
+import os
 
 import bpy
 import numpy as np
@@ -154,6 +155,7 @@ def measure_balance(context, track, frames):
     model, cam, clip = operators.gather_all(context, settings)
     names = operators.ground_names(settings, model) or bridge.guess_ground(model)
     ids = model.ids_of(names)
+    measure_balance.ground_names = names
     if not ids:
         return []
     scene_n, camera_n = bridge.build_scene(model), bridge.build_camera(cam)
@@ -185,9 +187,11 @@ def measure_balance(context, track, frames):
     return out
 
 
-def key_light(context, sun_obj, balances):
+def key_light(context, sun_obj, balances, sky_seen_rgb=None):
     """Keys the lamp's strength/colour and the sky's from the measured
-    balances (held constant before the first and after the last)."""
+    balances (held constant before the first and after the last);
+    `sky_seen_rgb` replaces the shadows' measured sky visibility (from
+    match_render). Returns {frame: target shadow ratio RGB}."""
     scene = context.scene
     world, bg = _sky_world(scene)
     data = sun_obj.data
@@ -201,10 +205,13 @@ def key_light(context, sun_obj, balances):
                    for _, zenith, b, vs, vl in balances], axis=0)
     vs = float(np.median([b[3] for b in balances]))
     vl = float(np.median([b[4] for b in balances]))
+    targets = {}
     for f, zenith, bal, _, _ in balances:
         ratio = arlight.ratio_for(k, zenith, vs, vl)
-        sun_rgb, sky_rgb = arlight.sun_and_sky(ratio, bal.lit_linear, zenith,
-                                               sky_seen_in_shadow=vs, sky_seen_lit=vl)
+        targets[f] = ratio
+        sun_rgb, sky_rgb = arlight.sun_and_sky(
+            ratio, bal.lit_linear, zenith,
+            sky_seen_in_shadow=vs if sky_seen_rgb is None else sky_seen_rgb, sky_seen_lit=vl)
         strength, color = arlight.as_strength_and_color(sun_rgb)
         data.energy, data.color = strength, color
         data.keyframe_insert("energy", frame=f)
@@ -215,6 +222,102 @@ def key_light(context, sun_obj, balances):
         bg.inputs["Color"].keyframe_insert("default_value", frame=f)
         bg.inputs["Strength"].keyframe_insert("default_value", frame=f)
     data[AR_KEYS_PROP] = [b[0] for b in balances]
+    return targets, vs, vl
+
+
+# The check render: at most this wide, this many samples.
+MATCH_WIDTH = 480
+MATCH_SAMPLES = 16
+
+
+def render_model_shadows(context, frame, mask, casters, inserts):
+    """Renders the Shadow Catcher pass of `frame` with the model's casters
+    (not the ground) casting instead of catching, the inserts hidden, small;
+    returns the pass's median RGB over `mask` (the pixels measured in the
+    footage, clip size), or None when it cannot be read. The pass goes
+    through a temporary File Output node (the Viewer's pixels are not
+    readable in background mode)."""
+    import tempfile
+    scene = context.scene
+    nt = scene.node_tree
+    rl = next((n for n in nt.nodes if n.bl_idname == "CompositorNodeRLayers"), None)
+    catcher = rl.outputs.get("Shadow Catcher") if rl is not None else None
+    if catcher is None:
+        return None
+    r = scene.render
+    saved = dict(frame=scene.frame_current, samples=scene.cycles.samples,
+                 pct=r.resolution_percentage, comp=r.use_compositing,
+                 catch={o.name: o.is_shadow_catcher for o in casters},
+                 hide={o.name: o.hide_render for o in inserts})
+    out = None
+    with tempfile.TemporaryDirectory(prefix="sunlapse_") as folder:
+        try:
+            scene.frame_set(frame)
+            scene.cycles.samples = MATCH_SAMPLES
+            r.resolution_percentage = max(1, min(100, int(100 * MATCH_WIDTH /
+                                                          max(1, r.resolution_x))))
+            r.use_compositing = True
+            for o in casters:
+                o.is_shadow_catcher = False
+            for o in inserts:
+                o.hide_render = True
+            out = nt.nodes.new("CompositorNodeOutputFile")
+            out.name = "sunlapse check"
+            out.base_path = folder
+            out.format.file_format = "OPEN_EXR"
+            out.format.color_depth = "32"
+            out.file_slots.clear()
+            out.file_slots.new("catcher")
+            nt.links.new(catcher, out.inputs["catcher"])
+            bpy.ops.render.render()
+            path = os.path.join(folder, f"catcher{frame:04d}.exr")
+            if not os.path.exists(path):
+                return None
+            img = bpy.data.images.load(path)
+            try:
+                w, h = img.size
+                px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, -1)[::-1, :, :3]
+            finally:
+                bpy.data.images.remove(img)
+        finally:
+            if out is not None:
+                nt.nodes.remove(out)
+            scene.frame_set(saved["frame"])
+            scene.cycles.samples = saved["samples"]
+            r.resolution_percentage = saved["pct"]
+            r.use_compositing = saved["comp"]
+            for o in casters:
+                o.is_shadow_catcher = saved["catch"][o.name]
+            for o in inserts:
+                o.hide_render = saved["hide"][o.name]
+    H, W = mask.shape
+    rows = np.minimum(H - 1, (np.arange(h) * H / h).astype(int))
+    cols = np.minimum(W - 1, (np.arange(w) * W / w).astype(int))
+    small = mask[rows][:, cols]
+    if small.sum() < arlight.MIN_PIXELS:
+        return None
+    return tuple(float(v) for v in np.median(px[small], axis=0))
+
+
+def match_render(context, sun_obj, balances, model_objects):
+    """Renders the model's own shadows once (render_model_shadows) on the
+    middle measured frame and re-keys the light so that they come out as
+    dark, per channel, as the footage's: what the shading formula leaves
+    out (specular, bounced light, bumps) is corrected by the renderer
+    itself. Returns (rendered ratio, target ratio) of that check, or None."""
+    ground = set(getattr(measure_balance, "ground_names", []))
+    casters = [o for o in model_objects if o.name not in ground]
+    if not casters:
+        return None
+    targets, vs, vl = key_light(context, sun_obj, balances)
+    f, zenith, bal, _, _ = balances[len(balances) // 2]
+    got = render_model_shadows(context, f, bal.shadow_mask, casters,
+                               [o for o in bpy.data.objects if is_insert(o)])
+    if got is None:
+        return None
+    seen = arlight.effective_sky_seen(got, targets[f], vs, vl)
+    key_light(context, sun_obj, balances, sky_seen_rgb=seen)
+    return got, targets[f]
 
 
 def preview_in_viewports(context, camera_obj):
@@ -237,7 +340,8 @@ def preview_in_viewports(context, camera_obj):
     return n
 
 
-def setup(context, add_sample_object=True, balance=True, preview=True, warnings=None):
+def setup(context, add_sample_object=True, balance=True, preview=True, warnings=None,
+          match_shadows=True):
     """Configures the scene for AR renders; returns a one-line summary.
     Warnings go to `warnings` (a list) when given, else into the summary."""
     scene = context.scene
@@ -267,7 +371,16 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     if cycles_vl is not None and hasattr(cycles_vl, "use_pass_shadow_catcher"):
         cycles_vl.use_pass_shadow_catcher = True
     track = results.load_track()
-    _compositor(scene, clip)
+    comp_note = ""
+    try:
+        _compositor(scene, clip)
+    except (AttributeError, KeyError, RuntimeError, TypeError) as e:
+        # Blender 5 moved the compositor to node groups: the render and the
+        # viewport preview still work; the composite is then left to the user.
+        comp_note = f"; compositor not set up on Blender {bpy.app.version_string} ({e})"
+        if warnings is not None:
+            warnings.append("the compositor could not be set up: lay the render over the clip "
+                            "with the Shadow Catcher pass yourself")
     cam = camera_obj.data
     cam.show_background_images = True
     bg = next((b for b in cam.background_images if b.source == "MOVIE_CLIP" and b.clip == clip),
@@ -292,8 +405,11 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         from . import acquire
         picks = acquire.spread(frames, BALANCE_FRAMES)
         balances = measure_balance(context, track, picks)
+    checked = None
     if balances:
         key_light(context, sun, balances)
+        if match_shadows:
+            checked = match_render(context, sun, balances, model)
         if track is not None:
             results.apply_track(context, track, sun, sync_sky=False)
         ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
@@ -301,6 +417,10 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         light = (f"; light from the footage's shadows on {len(balances)} frame(s): shadow/lit "
                  f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear; their casters "
                  f"hide {100 * (1 - seen):.0f}% of the sky)")
+        if checked is not None:
+            got, want = checked
+            light += (f"; the model's shadows rendered at R {got[0]:.2f} G {got[1]:.2f} B "
+                      f"{got[2]:.2f} for {want[0]:.2f}/{want[1]:.2f}/{want[2]:.2f}: corrected")
         if seen < ENCLOSED_SKY_SEEN:
             note = ("the footage's shadows are enclosed (a room?): the light of an open sky is "
                     "assumed and the inserts' shadows will come out too dark")
@@ -317,7 +437,8 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     scene.frame_set(scene.frame_current)
     if preview and not bpy.app.background:
         preview_in_viewports(context, camera_obj)
-    return f"AR render set up: {len(model)} model objects catch shadows{inserted}{light}"
+    return (f"AR render set up: {len(model)} model objects catch shadows{inserted}{light}"
+            f"{comp_note}")
 
 
 def render_frames(context, folder, frames):

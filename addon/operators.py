@@ -177,7 +177,7 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
     Returns (native scene, native camera, clip info, frame numbers, options,
     extra). `times_file` / `utc_offset` override the panel's Frame Times and
     UTC Offset. The camera's warnings go to `warnings` (a list) when given,
-    else to stderr."""
+    else to stdout."""
     settings = settings or context.scene.sunlapse
     native_loader.require()
     model, cam, clip = gather_all(context, settings, collection=collection)
@@ -222,9 +222,8 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
         if gps is not None:  # the frames' own GPS fix is the place
             options.latitude_deg, options.longitude_deg = gps
     for w in cam.warnings:
-        if warnings is None:
-            import sys
-            print(f"sunlapse: warning: {w}", file=sys.stderr)
+        if warnings is None:  # scripted runs: on stdout with the run's other warnings
+            print(f"sunlapse: warning: {w}")
         else:
             warnings.append(w)
     scene_n = bridge.build_scene(model)
@@ -295,6 +294,8 @@ def report_level(track):
 # The one Estimate Sun run of this Blender session (a second would race the
 # first for the stored track): the panels and the status bar read it.
 RUN = {"running": False, "fraction": 0.0, "cancel": False, "outcome": None, "drawn": 0}
+# A run whose modal handler has not ticked for this long is taken as ended.
+STALE_RUN_S = 10.0
 
 
 def _redraw_all():
@@ -347,6 +348,9 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
     _timer = None
 
     def _prepare(self, context):
+        if RUN["running"] and RUN.get("thread") is not None and \
+                time.monotonic() - RUN.get("tick", 0.0) > STALE_RUN_S:
+            RUN["running"] = False  # its modal handler is gone (an error): not running
         if RUN["running"]:
             self.report({"ERROR"}, "Estimate Sun is already running: wait for it, or press Esc "
                                    "to cancel it")
@@ -365,7 +369,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         if not self._prepare(context):
             return {"CANCELLED"}
         scene_n, camera_n, clip, frames, options, extra = self._job
-        RUN.update(running=True, fraction=0.0, cancel=False)
+        RUN.update(running=True, fraction=0.0, cancel=False, thread=None)
         try:
             track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames, options)
         except (pipeline.PipelineError, ValueError) as e:
@@ -381,7 +385,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             return self.execute(context)
         if not self._prepare(context):
             return {"CANCELLED"}
-        RUN.update(running=True, fraction=0.0, cancel=False, outcome=None)
+        RUN.update(running=True, fraction=0.0, cancel=False, outcome=None, thread=None,
+                   tick=time.monotonic())
         self._result = None
         self._error = None
 
@@ -399,6 +404,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
 
         self._thread = threading.Thread(target=work, name="sunlapse-estimate", daemon=True)
         self._thread.start()
+        RUN["thread"] = self._thread
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.1, window=context.window)
@@ -422,6 +428,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             RUN["cancel"] = True
         if event.type != "TIMER":
             return {"RUNNING_MODAL"} if event.type == "ESC" else {"PASS_THROUGH"}
+        RUN["tick"] = time.monotonic()
         pct = int(100 * RUN["fraction"])
         context.window_manager.progress_update(pct)
         if context.workspace:  # the status bar shows the bar and a cancel button
@@ -536,11 +543,16 @@ class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
     add_sample_object: bpy.props.BoolProperty(
         name="Add Sample Object", default=True,
         description="Drop a sample virtual object on the ground in view")
+    match_shadows: bpy.props.BoolProperty(
+        name="Match Shadows", default=True,
+        description="Render the model's own shadows once, small, and correct the light so "
+                    "that they come out as dark as the footage's (a few seconds)")
 
     def execute(self, context):
         try:
             warnings = []
-            note = ar.setup(context, add_sample_object=self.add_sample_object, warnings=warnings)
+            note = ar.setup(context, add_sample_object=self.add_sample_object, warnings=warnings,
+                            match_shadows=self.match_shadows)
         except (bridge.SceneError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

@@ -209,7 +209,10 @@ def draw_place(self, context):
     col.prop(s, "fit_latitude", text="Fit Latitude")
     col = layout.column(align=True)
     col.active = physical
-    times_known = bool(s.times_file) or s.use_exif_times
+    from . import bridge
+    clip = bridge.active_movieclip(context)
+    times_known = bool(s.times_file) or (
+        s.use_exif_times and clip is not None and clip.source == "SEQUENCE")
     if not s.times_file:
         col.prop(s, "date")
         col.prop(s, "start_hour", text="Start Time")

@@ -118,23 +118,26 @@ def measure_shadow_balance(rgb_linear: np.ndarray, ground: np.ndarray, shadow: n
 
 
 def sun_and_sky(shadow_ratio: Sequence[float], lit_linear: Sequence[float], zenith_deg: float,
-                ground_albedo: float = GROUND_ALBEDO, sky_seen_in_shadow: float = 1.0,
+                ground_albedo: float = GROUND_ALBEDO, sky_seen_in_shadow=1.0,
                 sky_seen_lit: float = 1.0):
     """(Sun irradiance RGB, sky radiance RGB) that reproduce the footage's
     `shadow_ratio` on horizontal ground and light it as bright as the
     plate's lit ground (for an albedo of `ground_albedo`).
 
     The real shadows lie beside their casters, which hide part of the sky
-    from them (`sky_seen_in_shadow`, cosine-weighted, 0..1; the lit ground
-    beside them sees `sky_seen_lit`); an insert hides the sky from its own
-    shadow the same way when rendered, so that share is taken out here:
+    from them (`sky_seen_in_shadow`, cosine-weighted, 0..1, one value or one
+    per channel; the lit ground beside them sees `sky_seen_lit`); an insert
+    hides the sky from its own shadow the same way when rendered, so that
+    share is taken out here:
         ratio = Vs x / (1 + Vl x),  x = pi W / (S cos z)
         S cos z + Vl pi W = pi lit / albedo."""
     cos_z = max(0.05, math.cos(math.radians(zenith_deg)))  # grazing Sun: bounded
-    vs = min(1.0, max(0.2, sky_seen_in_shadow))
-    vl = min(1.0, max(vs, sky_seen_lit))
+    seen = sky_seen_in_shadow if isinstance(sky_seen_in_shadow, (tuple, list, np.ndarray)) \
+        else (sky_seen_in_shadow,) * len(shadow_ratio)
     sun, sky = [], []
-    for r, lit in zip(shadow_ratio, lit_linear):
+    for r, lit, vs in zip(shadow_ratio, lit_linear, seen):
+        vs = min(1.0, max(0.2, float(vs)))
+        vl = min(1.0, max(vs, sky_seen_lit))
         r = min(MAX_RATIO * vs / vl, max(MIN_RATIO, r))
         x = r / max(1e-6, vs - r * vl)
         irradiance = math.pi * lit / ground_albedo
@@ -142,6 +145,23 @@ def sun_and_sky(shadow_ratio: Sequence[float], lit_linear: Sequence[float], zeni
         sun.append(direct / cos_z)
         sky.append(x * direct / math.pi)               # W
     return tuple(sun), tuple(sky)
+
+
+def effective_sky_seen(rendered_ratio: Sequence[float], target_ratio: Sequence[float],
+                       sky_seen_in_shadow: float, sky_seen_lit: float):
+    """Per channel, the shadows' sky visibility that explains the ratio a
+    render gave (`rendered_ratio`, lit as sun_and_sky set it for
+    `target_ratio`): everything the formula leaves out (specular, bounced
+    light, the ground's bumps) folded into it. Feeding it back to
+    sun_and_sky makes the render give the target."""
+    out = []
+    for got, want in zip(rendered_ratio, target_ratio):
+        vs = min(1.0, max(0.2, sky_seen_in_shadow))
+        vl = min(1.0, max(vs, sky_seen_lit))
+        want = min(MAX_RATIO * vs / vl, max(MIN_RATIO, want))
+        x = want / max(1e-6, vs - want * vl)
+        out.append(min(1.0, max(0.2, got * (1.0 + vl * x) / x)))
+    return tuple(out)
 
 
 def sun_to_sky(shadow_ratio: Sequence[float], zenith_deg: float, sky_seen_in_shadow: float = 1.0,
