@@ -8,7 +8,8 @@ ratio, so shadows keep the footage's tint) and lays the inserts over it.
 
 The Sun lamp's strength and colour and a uniform sky's are keyed from the
 footage's own shadows (core.arlight): the inserts' shadows come out as dark,
-and as blue, as the real ones beside them.
+and as blue, as the real ones beside them. A small check render of the
+model's own shadows then corrects what the formula leaves out.
 """
 
 import math

@@ -535,7 +535,9 @@ class CLIP_OT_sunlapse_export(bpy.types.Operator, ExportHelper):
 
 class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
     """Set up an AR render: Cycles, the model as shadow catcher, transparent
-    film, the render composited over the clip, the clip as camera background"""
+    film, the render composited over the clip (shadows by the Shadow Catcher
+    pass), the lamp and sky lit as the footage's shadows show, and the 3D
+    Views previewing the composite through the camera"""
     bl_idname = "clip.sunlapse_setup_ar"
     bl_label = "Set Up AR Render"
     bl_options = {"REGISTER", "UNDO"}
