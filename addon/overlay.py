@@ -44,6 +44,7 @@ ELEVATION_COLOR = (1.0, 0.6, 0.1, 1.0)
 AZIMUTH_COLOR = (0.35, 0.65, 1.0, 1.0)
 CONFIDENCE_COLOR = (0.55, 0.85, 0.55, 1.0)
 PLOT_BACK = (0.0, 0.0, 0.0, 0.6)
+PLOT_GAP = 16  # pixels between strips, for their titles
 
 
 def nice_range(lo, hi, min_span=2.0):
@@ -75,11 +76,12 @@ def plot_layout(track, frame, x0, y0, w, h):
     series = (("Elevation", ELEVATION_COLOR, [90.0 - f.zenith_deg for f in est]),
               ("Azimuth " + ("from north" if north else "from +Y"), AZIMUTH_COLOR,
                [az(f) for f in est]))
-    strip_h = (h - 8) / 3
+    gap = PLOT_GAP
+    strip_h = (h - 3 * gap) / 3  # each strip's title sits in the gap above it
     strips = []
     for k, (title, color, vals) in enumerate(series):
         lo, hi = nice_range(min(vals), max(vals))
-        sy = y0 + h - (k + 1) * strip_h - 4 * k
+        sy = y0 + h - (k + 1) * (strip_h + gap)
         pts = [(x0 + w * (f.frame - f0) / span, sy + strip_h * (v - lo) / (hi - lo))
                for f, v in zip(est, vals)]
         strips.append((title + " (°)", color, (lo, hi), pts, sy, strip_h))
@@ -99,7 +101,7 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
     scale = bpy.context.preferences.system.ui_scale
     left = 46 * scale                       # room for the degree labels
     w = min(520 * scale, region.width - left - 30 * scale)
-    h = 150 * scale
+    h = 190 * scale
     x0, y0 = left + 10 * scale, 30 * scale
     plot = plot_layout(track, frame, x0, y0, w, h)
     if plot is None or w < 80:
@@ -120,10 +122,10 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
         shader.uniform_float("color", color)
         batch_for_shader(shader, "LINE_STRIP", {"pos": pts}).draw(shader)
         blf.color(0, *color)
-        blf.position(0, x0 + 4 * scale, sy + sh - size - 1, 0)
+        blf.position(0, x0 + 2 * scale, sy + sh + 4, 0)
         blf.draw(0, title)
         blf.color(0, 0.85, 0.85, 0.85, 1.0)
-        for v, y in ((lo, sy), (hi, sy + sh - size * 0.8)):
+        for v, y in ((lo, sy), (hi, sy + sh - size * 0.75)):
             label = f"{v:.1f}" if hi <= 1.0 else f"{v:.0f}°"
             blf.position(0, x0 - left + 4 * scale, y, 0)
             blf.draw(0, label)
