@@ -12,7 +12,6 @@ and as blue, as the real ones beside them. A small check render of the
 model's own shadows then corrects what the formula leaves out.
 """
 
-import math
 import os
 
 import bpy
@@ -148,17 +147,17 @@ def _clear_keys(id_data, paths):
 
 
 def measure_balance(context, track, frames):
-    """[(frame, ShadowBalance)] of the footage's real shadows on `frames`
-    (the model's cast shadow toward the tracked Sun against the lit ground
-    beside it); frames where too little shadow shows are left out."""
+    """([(frame, zenith, ShadowBalance, sky seen in shadow, sky seen lit)],
+    ground names): the footage's real shadows on `frames` (the model's cast
+    shadow toward the tracked Sun against the lit ground beside it); frames
+    where too little shadow shows are left out."""
     from . import operators, pipeline  # operators imports this module
     settings = context.scene.sunlapse
     model, cam, clip = operators.gather_all(context, settings)
     names = operators.ground_names(settings, model) or bridge.guess_ground(model)
     ids = model.ids_of(names)
-    measure_balance.ground_names = names
     if not ids:
-        return []
+        return [], names
     scene_n, camera_n = bridge.build_scene(model), bridge.build_camera(cam)
     from . import acquire
     out = []
@@ -185,7 +184,7 @@ def measure_balance(context, track, frames):
             _, origins = acquire.ground_samples(scene_n, camera_n, ids, rows, cols)
             seen.append(arlight.sky_seen(origins, lambda o, d: scene_n.occluded(o, d)))
         out.append((f, est.zenith_deg, bal, seen[0], seen[1]))
-    return out
+    return out, names
 
 
 def key_light(context, sun_obj, balances, sky_seen_rgb=None):
@@ -300,13 +299,13 @@ def render_model_shadows(context, frame, mask, casters, inserts):
     return tuple(float(v) for v in np.median(px[small], axis=0))
 
 
-def match_render(context, sun_obj, balances, model_objects):
+def match_render(context, sun_obj, balances, model_objects, ground_names):
     """Renders the model's own shadows once (render_model_shadows) on the
     middle measured frame and re-keys the light so that they come out as
     dark, per channel, as the footage's: what the shading formula leaves
     out (specular, bounced light, bumps) is corrected by the renderer
     itself. Returns (rendered ratio, target ratio) of that check, or None."""
-    ground = set(getattr(measure_balance, "ground_names", []))
+    ground = set(ground_names)
     casters = [o for o in model_objects if o.name not in ground]
     if not casters:
         return None
@@ -405,12 +404,12 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         frames = [f.frame for f in results.estimated_frames(track)]
         from . import acquire
         picks = acquire.spread(frames, BALANCE_FRAMES)
-        balances = measure_balance(context, track, picks)
+        balances, ground_names = measure_balance(context, track, picks)
     checked = None
     if balances:
         key_light(context, sun, balances)
         if match_shadows:
-            checked = match_render(context, sun, balances, model)
+            checked = match_render(context, sun, balances, model, ground_names)
         if track is not None:
             results.apply_track(context, track, sun, sync_sky=False)
         ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)

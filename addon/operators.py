@@ -236,8 +236,8 @@ def physical_from_settings(context, settings, options):
     when the panel's date is empty; left unset (the run then falls back to
     two-pass and says so) when neither knows them."""
     sp = getattr(context.scene, "sun_pos_properties", None)
-    lat, lon, utc, hours = settings.latitude, settings.longitude, settings.utc_offset, settings.start_hour
-    tz = settings_zone(settings)
+    lat, lon, hours = settings.latitude, settings.longitude, settings.start_hour
+    tz = settings_zone(settings)  # the zone, else the UTC offset
     day = None
     if settings.date:
         try:

@@ -63,7 +63,7 @@ def _file_outputs(scene, folder):
 def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     """Runs the artist's path on preset_dir/scene.blend and measures frame
     `frame`; returns a dict of per-channel ratios (insert, real) and counts."""
-    from sunlapse import ar, acquire, bridge, operators, results
+    from sunlapse import ar, acquire, bridge, lamp, operators
     from sunlapse.core import arlight, trackfile
     bpy.ops.wm.open_mainfile(filepath=os.path.join(preset_dir, "scene.blend"))
     import run_estimate  # noqa: F401  (examples/ on sys.path)
@@ -103,8 +103,8 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     model, cam, clip = operators.gather_all(bpy.context, settings)
     ids = model.ids_of(truth.extra["ground_objects"])
     t = truth.frame(mask_frame)
-    sun = tuple(float(v) for v in __import__("sunlapse.lamp", fromlist=["x"]).sun_vector(
-        t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
+    sun = tuple(float(v) for v in lamp.sun_vector(t.zenith_deg,
+                                                  t.azimuth_deg + truth.north_offset_deg))
     ground, _ = acquire.ground_and_model_shadow(bridge.build_scene(model), bridge.build_camera(cam),
                                                 ids, sun)
     ground = (ground > 0) & free & ~arlight.dilate(shade, 1)
