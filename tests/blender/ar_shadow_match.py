@@ -112,7 +112,14 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     band = max(4, round(ground.shape[1] / 25))
     lit = arlight.dilate(real_shadow, band) & ~arlight.dilate(real_shadow, 2) & ground
     real_ratio = np.median(plate[dark], axis=0) / np.median(plate[lit], axis=0)
+    # The plate as the composite shows it against the frame the estimate
+    # reads (OpenCV): 8-bit display levels.
+    from sunlapse import pipeline
+    bgr = pipeline.read_frame(clip.filepath, frame - clip.frame_start)
+    plate_levels = np.abs(plate * 255.0 - bgr[..., ::-1].astype(np.float64))
     return {"insert": [float(x) for x in insert_ratio], "real": [float(x) for x in real_ratio],
+            "plate_vs_reader_mean": float(plate_levels.mean()),
+            "plate_vs_reader_max": float(plate_levels.max()),
             "insert_px": int(core.sum()), "real_px": int(dark.sum()), "lit_px": int(lit.sum()),
             "frame": frame}
 
@@ -129,6 +136,7 @@ if __name__ == "__main__":
         r = render_and_measure(os.path.abspath(args[0]), frame, work)
     diff = max(abs(a - b) for a, b in zip(r["insert"], r["real"]))
     print("AR_SHADOW {} frame {}: insert R/G/B {:.2f}/{:.2f}/{:.2f} real {:.2f}/{:.2f}/{:.2f} "
-          "max diff {:.3f} ({} insert px, {} real shadow px)".format(
+          "max diff {:.3f} ({} insert px, {} real shadow px); plate vs OpenCV reader: mean "
+          "{:.2f}, max {:.0f} levels".format(
               os.path.basename(os.path.normpath(args[0])), frame, *r["insert"], *r["real"], diff,
-              r["insert_px"], r["real_px"]))
+              r["insert_px"], r["real_px"], r["plate_vs_reader_mean"], r["plate_vs_reader_max"]))

@@ -267,6 +267,10 @@ def test_ar_insert_shadow_matches_the_footages_real_shadows(tiny_plaza, tmp_path
         assert abs(a - b) <= 0.05, (c, r)
     # The shadows are tinted as in the footage: blue kept more than red.
     assert r["insert"][2] > r["insert"][0]
+    # "Two decoders": the composite shows the clip exactly as the estimate
+    # reads it (the difference seen in Blender was the Filmic view
+    # transform, which Set Up AR Render replaces by Standard).
+    assert r["plate_vs_reader_mean"] < 0.5 and r["plate_vs_reader_max"] <= 2.0, r
 
 
 def test_ar_setup_keys_lamp_and_sky_from_the_footage_and_keeps_helpers_out_of_shot(estimated):
