@@ -93,7 +93,7 @@ def walkthrough(scene, tmp_path_factory):
     proc = blender_ui("--enable-event-simulate", fresh_copy(scene, tmp), "--python",
                       os.path.join(HERE, "ui_script.py"), "--", "walkthrough", shots, timeout=400)
     r = results(proc)
-    assert r.get("steps") == "4", proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert r.get("steps") == "5", proc.stdout[-3000:] + proc.stderr[-3000:]
     with open(os.path.join(shots, "steps.json")) as fh:
         steps = {s["name"]: s for s in json.load(fh)}
     if os.environ.get("SUNLAPSE_DOCS_SHOTS"):
@@ -136,6 +136,10 @@ def test_walkthrough_plot_and_apply_result_are_drawn(walkthrough):
         ("elevation", (1.0, 0.6, 0.1)), ("azimuth", (0.35, 0.65, 1.0)),
         ("confidence", (0.55, 0.85, 0.55)))}
     assert all(n > 20 for n in from_overlay.values()), from_overlay
+    # Scrolled down to Lamp and Render: the sidebar shows other content.
+    before = crop(load_rgb(s["path"]), s["sidebar"])
+    after = crop(load_rgb(steps["lamp_and_render"]["path"]), steps["lamp_and_render"]["sidebar"])
+    assert np.abs(before - after).mean() > 0.01
 
 
 def test_walkthrough_ar_preview_shows_the_footage_through_the_camera(walkthrough, scene):

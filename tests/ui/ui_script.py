@@ -287,6 +287,18 @@ def step_estimated():
     snap("estimated", clip_window=region_rect(area, "WINDOW"), sidebar=region_rect(area, "UI"),
          statusbar=statusbar_rect(win),
          apply=bpy.context.scene.sunlapse.last_apply)
+    # The sidebar scrolled down to Lamp and Render (the Apply result).
+    ui = next(r for r in area.regions if r.type == "UI")
+    for _ in range(12):
+        win.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=ui.x + ui.width // 2,
+                           y=ui.y + ui.height // 2)
+    bpy.app.timers.register(step_lamp_panel, first_interval=0.8)
+    return None
+
+
+def step_lamp_panel():
+    win, area, region = clip_area()
+    snap("lamp_and_render", sidebar=region_rect(area, "UI"))
     with bpy.context.temp_override(window=win, area=area, region=region):
         result("setup_ar", bpy.ops.clip.sunlapse_setup_ar())
     # The AR preview: the same area as a 3D View through the camera.
