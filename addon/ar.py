@@ -408,8 +408,13 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     checked = None
     if balances:
         key_light(context, sun, balances)
-        if match_shadows:
-            checked = match_render(context, sun, balances, model, ground_names)
+        if match_shadows and not comp_note:  # the check render reads a compositor output
+            try:
+                checked = match_render(context, sun, balances, model, ground_names)
+            except (AttributeError, KeyError, RuntimeError) as e:
+                if warnings is not None:
+                    warnings.append(f"the check render of the model's shadows failed ({e}): "
+                                    f"the light is set from the formula alone")
         if track is not None:
             results.apply_track(context, track, sun, sync_sky=False)
         ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
