@@ -2,17 +2,43 @@
 
 Cycles renders the virtual objects with a transparent film; the model (ground
 and every modelled object) becomes a shadow catcher, so it shows only the
-shadows the inserts cast and hides inserts behind real objects; the
-compositor lays the render over the clip's frames.
+shadows the inserts cast and hides inserts behind real objects. The
+compositor multiplies the clip by the Shadow Catcher pass (a per-channel
+ratio, so shadows keep the footage's tint) and lays the inserts over it.
+
+The Sun lamp's strength and colour and a uniform sky's are keyed from the
+footage's own shadows (core.arlight): the inserts' shadows come out as dark,
+and as blue, as the real ones beside them. A small check render of the
+model's own shadows then corrects what the formula leaves out.
 """
+
+import os
 
 import bpy
 import numpy as np
 from mathutils import Vector
 
-from . import bridge, results
+from . import bridge, lamp, results
+from .core import arlight
 
 INSERT_NAME = "sunlapse_insert"
+# Objects with this custom property are inserts: never part of the model.
+INSERT_PROP = "sunlapse_insert"
+WORLD_NAME = "sunlapse sky"
+# Frames of the clip measured for the light balance (spread over it).
+BALANCE_FRAMES = 5
+AR_KEYS_PROP = "sunlapse_ar_frames"
+# Real shadows that see less of the sky than this are indoors or walled in:
+# their light is bounced, which the open-sky balance does not model.
+ENCLOSED_SKY_SEEN = 0.5
+
+
+def is_insert(obj) -> bool:
+    return obj.name == INSERT_NAME or bool(obj.get(INSERT_PROP))
+
+
+def insert_names():
+    return [o.name for o in bpy.data.objects if is_insert(o)]
 
 
 def _model_objects(context):
@@ -21,15 +47,16 @@ def _model_objects(context):
         objs = settings.model_collection.all_objects
     else:
         objs = [o for o in context.view_layer.objects if o.visible_get()]
-    return [o for o in objs if o.type == "MESH" and o.name != INSERT_NAME]
+    return [o for o in objs if o.type == "MESH" and not is_insert(o)]
 
 
 def _compositor(scene, clip):
+    """clip x Shadow Catcher pass, inserts alpha-over it, to the Composite
+    and a Viewer (the backdrop shows the composite)."""
     scene.use_nodes = True
     nt = scene.node_tree
     for n in list(nt.nodes):
-        if n.bl_idname in ("CompositorNodeAlphaOver", "CompositorNodeMovieClip") and \
-                n.name.startswith("sunlapse"):
+        if n.name.startswith("sunlapse"):
             nt.nodes.remove(n)
     rl = next((n for n in nt.nodes if n.bl_idname == "CompositorNodeRLayers"), None) \
         or nt.nodes.new("CompositorNodeRLayers")
@@ -38,15 +65,28 @@ def _compositor(scene, clip):
     mc = nt.nodes.new("CompositorNodeMovieClip")
     mc.name = "sunlapse clip"
     mc.clip = clip
+    mul = nt.nodes.new("CompositorNodeMixRGB")
+    mul.name = "sunlapse shadows"
+    mul.blend_type = "MULTIPLY"
+    mul.inputs[0].default_value = 1.0
     over = nt.nodes.new("CompositorNodeAlphaOver")
     over.name = "sunlapse over clip"
-    nt.links.new(mc.outputs["Image"], over.inputs[1])
+    viewer = nt.nodes.new("CompositorNodeViewer")
+    viewer.name = "sunlapse viewer"
+    nt.links.new(mc.outputs["Image"], mul.inputs[1])
+    catcher = rl.outputs.get("Shadow Catcher")
+    if catcher is not None:
+        nt.links.new(catcher, mul.inputs[2])
+    nt.links.new(mul.outputs["Image"], over.inputs[1])
     nt.links.new(rl.outputs["Image"], over.inputs[2])
     nt.links.new(over.outputs["Image"], comp.inputs["Image"])
-    rl.location, mc.location, over.location, comp.location = (0, 200), (0, -100), (300, 100), (550, 100)
+    nt.links.new(over.outputs["Image"], viewer.inputs["Image"])
+    for node, xy in ((rl, (0, 300)), (mc, (0, -100)), (mul, (300, 0)), (over, (500, 150)),
+                     (comp, (750, 250)), (viewer, (750, 50))):
+        node.location = xy
 
 
-def _place_insert(context, camera_obj, ground_objs):
+def _place_insert(context, camera_obj):
     """A sample object on the ground near the middle of the view."""
     scene = context.scene
     depsgraph = context.evaluated_depsgraph_get()
@@ -62,6 +102,7 @@ def _place_insert(context, camera_obj, ground_objs):
     faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
     mesh.from_pydata(verts, [], faces)
     obj = bpy.data.objects.new(INSERT_NAME, mesh)
+    obj[INSERT_PROP] = True
     obj.location = loc
     mat = bpy.data.materials.new(INSERT_NAME)
     mat.diffuse_color = (0.8, 0.15, 0.1, 1.0)
@@ -72,8 +113,237 @@ def _place_insert(context, camera_obj, ground_objs):
     return obj
 
 
-def setup(context, add_sample_object=True):
-    """Configures the scene for AR renders; returns a one-line summary."""
+def _out_of_shot(obj, camera_obj, distance=1.0):
+    """Puts a helper (the Sun lamp: only its direction counts) just behind
+    the camera, where it is never in the shot."""
+    m = camera_obj.matrix_world
+    obj.location = m.translation + m.to_3x3() @ Vector((0.0, 0.0, distance))
+
+
+def _sky_world(scene):
+    """A uniform sky (colour and strength keyed per frame) as the world."""
+    world = bpy.data.worlds.get(WORLD_NAME) or bpy.data.worlds.new(WORLD_NAME)
+    world.use_nodes = True
+    nt = world.node_tree
+    bg = next((n for n in nt.nodes if n.type == "BACKGROUND"), None) \
+        or nt.nodes.new("ShaderNodeBackground")
+    out = next((n for n in nt.nodes if n.type == "OUTPUT_WORLD"), None) \
+        or nt.nodes.new("ShaderNodeOutputWorld")
+    for link in list(bg.inputs["Color"].links):
+        nt.links.remove(link)
+    if not bg.outputs["Background"].links:
+        nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    scene.world = world
+    return world, bg
+
+
+def _clear_keys(id_data, paths):
+    ad = id_data.animation_data
+    if ad is None or ad.action is None:
+        return
+    for fc in list(ad.action.fcurves):
+        if fc.data_path in paths:
+            ad.action.fcurves.remove(fc)
+
+
+def measure_balance(context, track, frames):
+    """([(frame, zenith, ShadowBalance, sky seen in shadow, sky seen lit)],
+    ground names): the footage's real shadows on `frames` (the model's cast
+    shadow toward the tracked Sun against the lit ground beside it); frames
+    where too little shadow shows are left out."""
+    from . import operators, pipeline  # operators imports this module
+    settings = context.scene.sunlapse
+    model, cam, clip = operators.gather_all(context, settings)
+    names = operators.ground_names(settings, model) or bridge.guess_ground(model)
+    ids = model.ids_of(names)
+    if not ids:
+        return [], names
+    scene_n, camera_n = bridge.build_scene(model), bridge.build_camera(cam)
+    from . import acquire
+    out = []
+    for f in frames:
+        est = track.frame(f)
+        if est is None or not est.has_estimate:
+            continue
+        try:
+            bgr = pipeline.read_frame(clip.filepath, f - clip.frame_start)
+        except pipeline.PipelineError:
+            continue
+        if bgr.shape[0] != camera_n.height or bgr.shape[1] != camera_n.width:
+            continue
+        sun = lamp.sun_vector(est.zenith_deg, est.azimuth_deg + track.north_offset_deg)
+        ground, shadow = acquire.ground_and_model_shadow(scene_n, camera_n, ids, tuple(sun),
+                                                         settings.ignore_top_rows)
+        rgb = arlight.srgb_to_linear(bgr[..., ::-1] / 255.0)
+        bal = arlight.measure_shadow_balance(rgb, ground > 0, shadow > 0)
+        if bal is None:
+            continue
+        seen = []
+        for mask in (bal.shadow_mask, bal.lit_mask):
+            rows, cols = np.nonzero(mask)
+            _, origins = acquire.ground_samples(scene_n, camera_n, ids, rows, cols)
+            seen.append(arlight.sky_seen(origins, lambda o, d: scene_n.occluded(o, d)))
+        out.append((f, est.zenith_deg, bal, seen[0], seen[1]))
+    return out, names
+
+
+def key_light(context, sun_obj, balances, sky_seen_rgb=None):
+    """Keys the lamp's strength/colour and the sky's from the measured
+    balances (held constant before the first and after the last);
+    `sky_seen_rgb` replaces the shadows' measured sky visibility (from
+    match_render). Returns {frame: target shadow ratio RGB}."""
+    scene = context.scene
+    world, bg = _sky_world(scene)
+    data = sun_obj.data
+    _clear_keys(data, {"energy", "color"})
+    _clear_keys(world.node_tree, {f'nodes["{bg.name}"].inputs[0].default_value',
+                                  f'nodes["{bg.name}"].inputs[1].default_value'})
+    # One Sun-to-sky balance for the clip (the median of the frames'): a
+    # few frames' shadows are too few pixels to key each on its own; the
+    # shadow ratio still follows the Sun's height frame by frame.
+    k = np.median([arlight.sun_to_sky(b.shadow_ratio, zenith, vs, vl)
+                   for _, zenith, b, vs, vl in balances], axis=0)
+    vs = float(np.median([b[3] for b in balances]))
+    vl = float(np.median([b[4] for b in balances]))
+    targets = {}
+    for f, zenith, bal, _, _ in balances:
+        ratio = arlight.ratio_for(k, zenith, vs, vl)
+        targets[f] = ratio
+        sun_rgb, sky_rgb = arlight.sun_and_sky(
+            ratio, bal.lit_linear, zenith,
+            sky_seen_in_shadow=vs if sky_seen_rgb is None else sky_seen_rgb, sky_seen_lit=vl)
+        strength, color = arlight.as_strength_and_color(sun_rgb)
+        data.energy, data.color = strength, color
+        data.keyframe_insert("energy", frame=f)
+        data.keyframe_insert("color", frame=f)
+        strength, color = arlight.as_strength_and_color(sky_rgb)
+        bg.inputs["Color"].default_value = color + (1.0,)
+        bg.inputs["Strength"].default_value = strength
+        bg.inputs["Color"].keyframe_insert("default_value", frame=f)
+        bg.inputs["Strength"].keyframe_insert("default_value", frame=f)
+    data[AR_KEYS_PROP] = [b[0] for b in balances]
+    return targets, vs, vl
+
+
+# The check render: at most this wide, this many samples.
+MATCH_WIDTH = 480
+MATCH_SAMPLES = 16
+
+
+def render_model_shadows(context, frame, mask, casters, inserts):
+    """Renders the Shadow Catcher pass of `frame` with the model's casters
+    (not the ground) casting instead of catching, the inserts hidden, small;
+    returns the pass's median RGB over `mask` (the pixels measured in the
+    footage, clip size), or None when it cannot be read. The pass goes
+    through a temporary File Output node (the Viewer's pixels are not
+    readable in background mode)."""
+    import tempfile
+    scene = context.scene
+    nt = scene.node_tree
+    rl = next((n for n in nt.nodes if n.bl_idname == "CompositorNodeRLayers"), None)
+    catcher = rl.outputs.get("Shadow Catcher") if rl is not None else None
+    if catcher is None:
+        return None
+    r = scene.render
+    saved = dict(frame=scene.frame_current, samples=scene.cycles.samples,
+                 pct=r.resolution_percentage, comp=r.use_compositing,
+                 catch={o.name: o.is_shadow_catcher for o in casters},
+                 hide={o.name: o.hide_render for o in inserts})
+    out = None
+    with tempfile.TemporaryDirectory(prefix="sunlapse_") as folder:
+        try:
+            scene.frame_set(frame)
+            scene.cycles.samples = MATCH_SAMPLES
+            r.resolution_percentage = max(1, min(100, int(100 * MATCH_WIDTH /
+                                                          max(1, r.resolution_x))))
+            r.use_compositing = True
+            for o in casters:
+                o.is_shadow_catcher = False
+            for o in inserts:
+                o.hide_render = True
+            out = nt.nodes.new("CompositorNodeOutputFile")
+            out.name = "sunlapse check"
+            out.base_path = folder
+            out.format.file_format = "OPEN_EXR"
+            out.format.color_depth = "32"
+            out.file_slots.clear()
+            out.file_slots.new("catcher")
+            nt.links.new(catcher, out.inputs["catcher"])
+            bpy.ops.render.render()
+            path = os.path.join(folder, f"catcher{frame:04d}.exr")
+            if not os.path.exists(path):
+                return None
+            img = bpy.data.images.load(path)
+            try:
+                w, h = img.size
+                px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, -1)[::-1, :, :3]
+            finally:
+                bpy.data.images.remove(img)
+        finally:
+            if out is not None:
+                nt.nodes.remove(out)
+            scene.frame_set(saved["frame"])
+            scene.cycles.samples = saved["samples"]
+            r.resolution_percentage = saved["pct"]
+            r.use_compositing = saved["comp"]
+            for o in casters:
+                o.is_shadow_catcher = saved["catch"][o.name]
+            for o in inserts:
+                o.hide_render = saved["hide"][o.name]
+    H, W = mask.shape
+    rows = np.minimum(H - 1, (np.arange(h) * H / h).astype(int))
+    cols = np.minimum(W - 1, (np.arange(w) * W / w).astype(int))
+    small = mask[rows][:, cols]
+    if small.sum() < arlight.MIN_PIXELS:
+        return None
+    return tuple(float(v) for v in np.median(px[small], axis=0))
+
+
+def match_render(context, sun_obj, balances, model_objects, ground_names):
+    """Renders the model's own shadows once (render_model_shadows) on the
+    middle measured frame and re-keys the light so that they come out as
+    dark, per channel, as the footage's: what the shading formula leaves
+    out (specular, bounced light, bumps) is corrected by the renderer
+    itself. Returns (rendered ratio, target ratio) of that check, or None."""
+    ground = set(ground_names)
+    casters = [o for o in model_objects if o.name not in ground]
+    if not casters:
+        return None
+    targets, vs, vl = key_light(context, sun_obj, balances)
+    f, zenith, bal, _, _ = balances[len(balances) // 2]
+    got = render_model_shadows(context, f, bal.shadow_mask, casters,
+                               [o for o in bpy.data.objects if is_insert(o)])
+    if got is None:
+        return None
+    seen = arlight.effective_sky_seen(got, targets[f], vs, vl)
+    key_light(context, sun_obj, balances, sky_seen_rgb=seen)
+    return got, targets[f]
+
+
+def preview_in_viewports(context, camera_obj):
+    """Every 3D View of the window looks through the camera, rendered: the
+    footage behind (camera background, transparent film), the model as
+    shadow catcher, the inserts lit by the keyed Sun."""
+    screen = getattr(context, "screen", None) or getattr(context.window, "screen", None)
+    if screen is None:
+        return 0
+    n = 0
+    for area in screen.areas:
+        if area.type != "VIEW_3D":
+            continue
+        space = area.spaces.active
+        space.shading.type = "RENDERED"
+        space.region_3d.view_perspective = "CAMERA"
+        space.camera = camera_obj if space.use_local_camera else space.camera
+        area.tag_redraw()
+        n += 1
+    return n
+
+
+def setup(context, add_sample_object=True, balance=True, preview=True, warnings=None,
+          match_shadows=True):
+    """Configures the scene for AR renders; returns a one-line summary.
+    Warnings go to `warnings` (a list) when given, else into the summary."""
     scene = context.scene
     settings = scene.sunlapse
     sun = settings.sun_lamp
@@ -85,35 +355,95 @@ def setup(context, add_sample_object=True):
     clip = bridge.active_movieclip(context)
     if clip is None:
         raise bridge.SceneError("No clip: open the footage in the Movie Clip Editor.")
+    scene.camera = camera_obj
     scene.render.engine = "CYCLES"
     scene.render.film_transparent = True
+    # The plate goes through the view transform with the render: Standard
+    # shows it as it is in the file (Filmic would grade it a second time).
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
     model = _model_objects(context)
     for obj in model:
         obj.is_shadow_catcher = True
-    if scene.world is None:  # skylight for the inserts, following the Sun
-        world = bpy.data.worlds.new("sunlapse sky")
-        world.use_nodes = True
-        sky = world.node_tree.nodes.new("ShaderNodeTexSky")
-        sky.sky_type = "NISHITA"
-        sky.sun_disc = False
-        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.15
-        world.node_tree.links.new(sky.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
-        scene.world = world
-        track = results.load_track()
-        if track is not None:
-            results.apply_track(context, track, sun, sync_sky=True)
-    _compositor(scene, clip)
+    cycles_vl = getattr(context.view_layer, "cycles", None)
+    if cycles_vl is not None and hasattr(cycles_vl, "use_pass_shadow_catcher"):
+        cycles_vl.use_pass_shadow_catcher = True
+    track = results.load_track()
+    comp_note = ""
+    try:
+        _compositor(scene, clip)
+    except (AttributeError, KeyError, RuntimeError, TypeError) as e:
+        # Blender 5 moved the compositor to node groups: the render and the
+        # viewport preview still work; the composite is then left to the user.
+        comp_note = f"; compositor not set up on Blender {bpy.app.version_string} ({e})"
+        if warnings is not None:
+            warnings.append("the compositor could not be set up: lay the render over the clip "
+                            "with the Shadow Catcher pass yourself")
     cam = camera_obj.data
     cam.show_background_images = True
-    if not any(bg.source == "MOVIE_CLIP" and bg.clip == clip for bg in cam.background_images):
+    bg = next((b for b in cam.background_images if b.source == "MOVIE_CLIP" and b.clip == clip),
+              None)
+    if bg is None:
         bg = cam.background_images.new()
         bg.source = "MOVIE_CLIP"
         bg.clip = clip
+    bg.alpha = 1.0
+    bg.display_depth = "BACK"
+    if hasattr(bg, "clip_user"):
+        bg.clip_user.proxy_render_size = "FULL"
+    _out_of_shot(sun, camera_obj)
     inserted = ""
-    if add_sample_object and INSERT_NAME not in bpy.data.objects:
-        _place_insert(context, camera_obj, model)
+    if add_sample_object and not insert_names():
+        _place_insert(context, camera_obj)
         inserted = f", added '{INSERT_NAME}'"
-    return f"AR render set up: {len(model)} model objects catch shadows{inserted}"
+    light = ""
+    balances = []
+    if balance and track is not None:
+        frames = [f.frame for f in results.estimated_frames(track)]
+        from . import acquire
+        picks = acquire.spread(frames, BALANCE_FRAMES)
+        balances, ground_names = measure_balance(context, track, picks)
+    checked = None
+    if balances:
+        key_light(context, sun, balances)
+        if match_shadows and not comp_note:  # the check render reads a compositor output
+            try:
+                checked = match_render(context, sun, balances, model, ground_names)
+            except (AttributeError, KeyError, RuntimeError) as e:
+                if warnings is not None:
+                    warnings.append(f"the check render of the model's shadows failed ({e}): "
+                                    f"the light is set from the formula alone")
+        if track is not None:
+            results.apply_track(context, track, sun, sync_sky=False)
+        ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
+        seen = np.mean([b[3] for b in balances])
+        light = (f"; light from the footage's shadows on {len(balances)} frame(s): shadow/lit "
+                 f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear; their casters "
+                 f"hide {100 * (1 - seen):.0f}% of the sky)")
+        if checked is not None:
+            got, want = checked
+            light += (f"; the model's shadows rendered at R {got[0]:.2f} G {got[1]:.2f} B "
+                      f"{got[2]:.2f} for {want[0]:.2f}/{want[1]:.2f}/{want[2]:.2f}: corrected")
+        if seen < ENCLOSED_SKY_SEEN:
+            note = ("the footage's shadows are enclosed (a room?): the light of an open sky is "
+                    "assumed and the inserts' shadows will come out too dark")
+            if warnings is None:
+                light += ". Warning: " + note
+            else:
+                warnings.append(note)
+    elif balance:
+        light = "; no real shadow measurable in the footage: lamp and sky left as they were"
+        if scene.world is None:
+            world, bgn = _sky_world(scene)
+            bgn.inputs["Color"].default_value = (0.55, 0.7, 1.0, 1.0)
+            bgn.inputs["Strength"].default_value = 0.3
+    scene.frame_set(scene.frame_current)
+    if preview and not bpy.app.background:
+        preview_in_viewports(context, camera_obj)
+    return (f"AR render set up: {len(model)} model objects catch shadows{inserted}{light}"
+            f"{comp_note}")
 
 
 def render_frames(context, folder, frames):

@@ -1,5 +1,6 @@
 """Operators. They call bridge/core and _native; errors go to self.report."""
 
+import datetime as dt
 import os
 import threading
 import time
@@ -9,21 +10,41 @@ from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
 from . import ar, bridge, lamp, native_loader, pipeline, results
-from .core import frametimes, trackfile
+from .core import exif, frametimes, trackfile
 
 
-def ground_names(settings):
-    return [n.strip() for n in settings.ground_objects.split(",") if n.strip()]
+def ground_names(settings, model=None):
+    """The picked Ground object and any more named in Other Ground; with the
+    model given, names match its objects whatever their case (raises
+    bridge.SceneError naming one that matches none)."""
+    names = [settings.ground_object.name] if settings.ground_object is not None else []
+    names += [n.strip() for n in settings.ground_objects.split(",") if n.strip()]
+    if model is None:
+        return names
+    by_lower = {n.lower(): n for n in model.names}
+    out = []
+    for n in names:
+        match = n if n in model.names else by_lower.get(n.lower())
+        if match is None:
+            raise bridge.SceneError(f"Ground: '{n}' is not an object of the model "
+                                    f"(model objects: {', '.join(model.names[:8])}"
+                                    f"{' ...' if len(model.names) > 8 else ''})")
+        if match not in out:
+            out.append(match)
+    return out
 
 
 def gather_all(context, settings=None, movieclip=None, collection=None,
                camera_obj=None):
-    """Model, camera and clip of the current scene; raises bridge.SceneError."""
+    """Model, camera and clip of the current scene; raises bridge.SceneError.
+    AR inserts are never part of the model (with Model empty, every visible
+    mesh would otherwise count)."""
     settings = settings or context.scene.sunlapse
     clip = bridge.gather_clip(context, movieclip)
     clip_obj = movieclip or bridge.active_movieclip(context)
     cam = bridge.gather_camera(context, camera_obj or settings.camera, clip, clip_obj)
-    model = bridge.gather_model(context, collection or settings.model_collection)
+    model = bridge.gather_model(context, collection or settings.model_collection,
+                                exclude=ar.insert_names())
     return model, cam, clip
 
 
@@ -48,7 +69,7 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             return {"CANCELLED"}
         for w in cam.warnings:
             self.report({"WARNING"}, w)
-        ground = ground_names(settings) or bridge.guess_ground(model, cam)
+        ground = ground_names(settings, model) or bridge.guess_ground(model, cam)
         msg = (f"{model.num_triangles} triangles in {len(model.names)} objects "
                f"(gathered in {t1 - t0:.2f} s, BVH {t2 - t1:.2f} s); camera "
                f"'{cam.name}'; clip '{clip.name}' {clip.width}x{clip.height}, "
@@ -106,11 +127,28 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def load_frame_times(path, utc_offset_hours, clip, frames):
+def settings_zone(settings):
+    """The panel's time zone (IANA name, else the UTC offset) as a tzinfo;
+    raises bridge.SceneError for an unknown name."""
+    try:
+        return exif.zone(settings.time_zone, settings.utc_offset)
+    except exif.ExifError as e:
+        raise bridge.SceneError(str(e))
+
+
+def load_frame_times(path, utc_offset_hours, clip, frames, tz=None):
     """{scene frame: aware datetime} for `frames` from a times CSV (its frame
-    column counts the clip's frames from 1); raises bridge.SceneError."""
+    column counts the clip's frames from 1); raises bridge.SceneError.
+    With `tz` (a zone with daylight saving), local times are read in it on
+    their own date; times with their own offset or in UTC are kept."""
     try:
         table = frametimes.read_times(path, utc_offset_hours)
+        if tz is not None:
+            # Local rows move with the offset they are read in; rows with
+            # their own offset (or UTC) do not: read at two offsets to tell.
+            a, b = frametimes.read_times(path, 0.0), frametimes.read_times(path, 1.0)
+            table = {k: (a[k].replace(tzinfo=None).replace(tzinfo=tz).astimezone(
+                dt.timezone.utc) if a[k] != b[k] else a[k]) for k in a}
         clip_frames = [f - clip.frame_start + 1 for f in range(frames[0], frames[1] + 1)]
         times = frametimes.times_for(table, clip_frames, path)
     except frametimes.FrameTimesError as e:
@@ -118,23 +156,39 @@ def load_frame_times(path, utc_offset_hours, clip, frames):
     return {f: t for f, t in zip(range(frames[0], frames[1] + 1), times)}
 
 
+def exif_times(clip, frames, tz):
+    """({scene frame: UTC time} or None, (lat, lon) or None) from the EXIF
+    data of an image sequence's frames; raises bridge.SceneError for a
+    file whose time cannot be read."""
+    try:
+        captures = exif.read_sequence(clip.filepath, tz, count=clip.frame_duration)
+    except exif.ExifError as e:
+        raise bridge.SceneError(f"EXIF times: {e}")
+    table = exif.times_by_frame(captures, clip.frame_start)
+    if table is not None and not all(f in table for f in range(frames[0], frames[1] + 1)):
+        table = None
+    return table, exif.place(captures)
+
+
 def prepare_run(context, settings=None, collection=None, ground=None, frames=None,
-                method=None, smoothing=None, times_file=None, utc_offset=None):
-    """Everything a run needs, gathered on the main thread (bpy reads only).
-    Returns (native scene, native camera, clip info, frame numbers, options).
-    `times_file` / `utc_offset` override the panel's Frame Times and UTC
-    Offset."""
+                method=None, smoothing=None, times_file=None, utc_offset=None, warnings=None):
+    """Everything a run needs, gathered on the main thread (bpy reads only,
+    and the panel's place filled from the frames' GPS).
+    Returns (native scene, native camera, clip info, frame numbers, options,
+    extra). `times_file` / `utc_offset` override the panel's Frame Times and
+    UTC Offset. The camera's warnings go to `warnings` (a list) when given,
+    else to stdout."""
     settings = settings or context.scene.sunlapse
     native_loader.require()
     model, cam, clip = gather_all(context, settings, collection=collection)
-    names = ground or ground_names(settings) or bridge.guess_ground(model, cam)
+    names = ground or ground_names(settings, model) or bridge.guess_ground(model, cam)
     missing = [g for g in names if g not in model.names]
     if missing:
         raise bridge.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")
     ids = model.ids_of(names)
     if not ids:
-        raise bridge.SceneError("no ground found: name the object(s) the shadows fall on "
-                                "(Ground in the panel)")
+        raise bridge.SceneError("no ground found: pick the object the shadows fall on "
+                                "(Ground in the Scene panel)")
     if frames is None:
         frames = (clip.frame_start, clip.frame_end)
         if settings.use_frame_range:
@@ -146,18 +200,34 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
         north_offset_deg=bridge.scene_north_offset_deg(context), ground_object_ids=ids)
+    track_extra = {"ground": names, "model_objects": model.names}
     times_path = times_file if times_file is not None else (
         settings.times_file and bpy.path.abspath(settings.times_file))
+    gps = None
     if times_path:
         utc = utc_offset if utc_offset is not None else settings.utc_offset
-        options.frame_times = load_frame_times(times_path, utc, clip, frames)
+        tz = settings_zone(settings) if settings.time_zone and utc_offset is None else None
+        options.frame_times = load_frame_times(times_path, utc, clip, frames, tz)
+        track_extra["times"] = "times file"
+    elif clip.source == "SEQUENCE" and settings.use_exif_times:
+        table, gps = exif_times(clip, frames, settings_zone(settings))
+        if table is not None:
+            options.frame_times = table
+            track_extra["times"] = "exif"
+        if gps is not None:
+            settings.latitude, settings.longitude = gps
+            track_extra["gps_deg"] = list(gps)
     if options.smoothing == "physical":
         physical_from_settings(context, settings, options)
+        if gps is not None:  # the frames' own GPS fix is the place
+            options.latitude_deg, options.longitude_deg = gps
     for w in cam.warnings:
-        print(f"sunlapse: warning: {w}")
+        if warnings is None:  # scripted runs: on stdout with the run's other warnings
+            print(f"sunlapse: warning: {w}")
+        else:
+            warnings.append(w)
     scene_n = bridge.build_scene(model)
     camera_n = bridge.build_camera(cam)
-    track_extra = {"ground": names, "model_objects": model.names}
     return scene_n, camera_n, clip, list(range(frames[0], frames[1] + 1)), options, track_extra
 
 
@@ -165,9 +235,9 @@ def physical_from_settings(context, settings, options):
     """Place and time from the panel, or from Blender's Sun Position add-on
     when the panel's date is empty; left unset (the run then falls back to
     two-pass and says so) when neither knows them."""
-    import datetime as dt
     sp = getattr(context.scene, "sun_pos_properties", None)
-    lat, lon, utc, hours = settings.latitude, settings.longitude, settings.utc_offset, settings.start_hour
+    lat, lon, hours = settings.latitude, settings.longitude, settings.start_hour
+    tz = settings_zone(settings)  # the zone, else the UTC offset
     day = None
     if settings.date:
         try:
@@ -176,14 +246,15 @@ def physical_from_settings(context, settings, options):
             raise bridge.SceneError(f"Date '{settings.date}' is not YYYY-MM-DD")
     elif sp is not None:
         day = dt.date(sp.year, sp.month, sp.day)
-        lat, lon, utc, hours = sp.latitude, sp.longitude, sp.UTC_zone, sp.time
+        lat, lon, hours = sp.latitude, sp.longitude, sp.time
+        tz = exif.zone("", sp.UTC_zone + (1.0 if getattr(sp, "use_daylight_savings", False) else 0.0))
     options.fit_latitude = settings.fit_latitude
     if options.frame_times is not None:  # the times file is the clock
         options.latitude_deg, options.longitude_deg = lat, lon
         return
     if day is None or settings.frame_seconds <= 0:
         return
-    options.first_time = frametimes.local_start(day, hours, utc)
+    options.first_time = exif.local_start(day, hours, tz)
     options.frame_seconds = settings.frame_seconds
     options.latitude_deg, options.longitude_deg = lat, lon
 
@@ -220,6 +291,53 @@ def report_level(track):
     return {"WARNING"} if short or troubled else {"INFO"}
 
 
+# The one Estimate Sun run of this Blender session (a second would race the
+# first for the stored track): the panels and the status bar read it.
+RUN = {"running": False, "fraction": 0.0, "cancel": False, "outcome": None, "drawn": 0}
+# A run whose modal handler has not ticked for this long is taken as ended.
+STALE_RUN_S = 10.0
+
+
+def _redraw_all():
+    wm = bpy.context.window_manager
+    for win in wm.windows:
+        for area in win.screen.areas:
+            if area.type in ("CLIP_EDITOR", "VIEW_3D", "STATUSBAR"):
+                area.tag_redraw()
+
+
+def draw_status_progress(self, context):
+    """The status bar while a run goes: a progress bar (Blender 4.0+'s
+    progress widget; a text bar before) and a cancel button, like Blender's
+    own jobs."""
+    if not RUN["running"]:
+        return
+    RUN["drawn"] += 1  # the UI tests check the bar was drawn during a run
+    row = self.layout.row(align=True)
+    text = "Cancelling the Sun estimate" if RUN["cancel"] else "Estimating the Sun"
+    if hasattr(row, "progress"):
+        row.progress(factor=RUN["fraction"], type="BAR", text=f"{text} {100 * RUN['fraction']:.0f}%")
+    else:
+        filled = int(round(20 * RUN["fraction"]))
+        row.label(text=f"{text}  {'█' * filled}{'░' * (20 - filled)}  {100 * RUN['fraction']:.0f}%",
+                  icon="LIGHT_SUN")
+    row.operator("clip.sunlapse_cancel", text="", icon="CANCEL")
+
+
+class CLIP_OT_sunlapse_cancel(bpy.types.Operator):
+    """Cancel the running Sun estimate (as Esc does); nothing is changed"""
+    bl_idname = "clip.sunlapse_cancel"
+    bl_label = "Cancel Sun Estimate"
+
+    @classmethod
+    def poll(cls, context):
+        return RUN["running"]
+
+    def execute(self, context):
+        RUN["cancel"] = True
+        return {"FINISHED"}
+
+
 class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
     """Estimate the Sun on every frame of the clip: initial Sun on the first
     frame, shadow tracking on the rest, then smoothing. Esc cancels"""
@@ -230,22 +348,35 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
     _timer = None
 
     def _prepare(self, context):
+        if RUN["running"] and RUN.get("thread") is not None and \
+                time.monotonic() - RUN.get("tick", 0.0) > STALE_RUN_S:
+            RUN["running"] = False  # its modal handler is gone (an error): not running
+        if RUN["running"]:
+            self.report({"ERROR"}, "Estimate Sun is already running: wait for it, or press Esc "
+                                   "to cancel it")
+            return False
+        warnings = []
         try:
-            self._job = prepare_run(context)
+            self._job = prepare_run(context, warnings=warnings)
         except (bridge.SceneError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return False
+        for w in warnings:
+            self.report({"WARNING"}, w)
         return True
 
     def execute(self, context):  # synchronous: blender -b, scripts
         if not self._prepare(context):
             return {"CANCELLED"}
         scene_n, camera_n, clip, frames, options, extra = self._job
+        RUN.update(running=True, fraction=0.0, cancel=False, thread=None)
         try:
             track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames, options)
         except (pipeline.PipelineError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
+        finally:
+            RUN["running"] = False
         self.report(report_level(track), finish_run(context, track, clip, extra))
         return {"FINISHED"}
 
@@ -254,8 +385,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             return self.execute(context)
         if not self._prepare(context):
             return {"CANCELLED"}
-        self._fraction = 0.0
-        self._cancel = False
+        RUN.update(running=True, fraction=0.0, cancel=False, outcome=None, thread=None,
+                   tick=time.monotonic())
         self._result = None
         self._error = None
 
@@ -263,8 +394,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             scene_n, camera_n, clip, frames, options, _ = self._job
 
             def progress(fraction):
-                self._fraction = fraction
-                return not self._cancel
+                RUN["fraction"] = fraction
+                return not RUN["cancel"]
             try:
                 self._result = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start,
                                             frames, options, progress)
@@ -273,10 +404,12 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
 
         self._thread = threading.Thread(target=work, name="sunlapse-estimate", daemon=True)
         self._thread.start()
+        RUN["thread"] = self._thread
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.modal_handler_add(self)
+        _redraw_all()
         return {"RUNNING_MODAL"}
 
     def _end(self, context):
@@ -285,36 +418,44 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             wm.event_timer_remove(self._timer)
             self._timer = None
         wm.progress_end()
+        RUN["running"] = False
         if context.workspace:
             context.workspace.status_text_set(None)
+        _redraw_all()
 
     def modal(self, context, event):
         if event.type == "ESC" and event.value == "PRESS":
-            self._cancel = True
+            RUN["cancel"] = True
         if event.type != "TIMER":
             return {"RUNNING_MODAL"} if event.type == "ESC" else {"PASS_THROUGH"}
-        pct = int(100 * self._fraction)
+        RUN["tick"] = time.monotonic()
+        pct = int(100 * RUN["fraction"])
         context.window_manager.progress_update(pct)
-        if context.workspace:
-            context.workspace.status_text_set(
-                f"sunlapse: estimating the Sun {pct}%" + (" (cancelling)" if self._cancel
-                                                         else " - Esc to cancel"))
+        if context.workspace:  # the status bar shows the bar and a cancel button
+            context.workspace.status_text_set(draw_status_progress)
+        _redraw_all()
         if self._thread.is_alive():
             return {"PASS_THROUGH"}
         self._end(context)
-        if self._cancel or (isinstance(self._error, pipeline.PipelineError)
-                            and str(self._error) == "cancelled"):
+        stopped = isinstance(self._error, pipeline.PipelineError) and str(self._error) == "cancelled"
+        if self._error is not None and not stopped:
+            RUN["outcome"] = f"failed: {type(self._error).__name__}: {self._error}"
+            self.report({"ERROR"}, f"Estimate failed: {self._error}")
+            context.scene.sunlapse.last_report = f"Estimate failed: {self._error}"
+            return {"CANCELLED"}
+        if stopped or RUN["cancel"]:
+            # stopped: the worker saw the cancel and gave up; else it had
+            # finished already and its result is dropped.
+            RUN["outcome"] = "cancelled" if stopped else "cancelled after the run ended"
             self.report({"INFO"}, "Estimate cancelled; nothing was changed")
             return {"CANCELLED"}
-        if self._error is not None:
-            self.report({"ERROR"}, f"Estimate failed: {self._error}")
-            return {"CANCELLED"}
         _, _, clip, _, _, extra = self._job
+        RUN["outcome"] = "finished"
         self.report(report_level(self._result), finish_run(context, self._result, clip, extra))
         return {"FINISHED"}
 
     def cancel(self, context):  # Blender closes the window / file
-        self._cancel = True
+        RUN["cancel"] = True
         self._end(context)
 
 
@@ -343,7 +484,13 @@ class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
             return {"CANCELLED"}
         settings.sun_lamp = sun
         n = len(results.estimated_frames(track))
-        self.report({"INFO"}, f"Keyed '{sun.name}' ({sun.rotation_mode}) on {n} frames")
+        frames = [f.frame for f in results.estimated_frames(track)]
+        msg = (f"Keyed '{sun.name}' ({sun.rotation_mode}) on {n} frames "
+               f"({frames[0]}-{frames[-1]})" + (", sky" if settings.sync_sky and results.sky_node(
+                   context.scene) is not None else "") +
+               (", strength" if settings.keyframe_strength else ""))
+        settings.last_apply = msg
+        self.report({"INFO"}, msg)
         return {"FINISHED"}
 
 
@@ -388,7 +535,9 @@ class CLIP_OT_sunlapse_export(bpy.types.Operator, ExportHelper):
 
 class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
     """Set up an AR render: Cycles, the model as shadow catcher, transparent
-    film, the render composited over the clip, the clip as camera background"""
+    film, the render composited over the clip (shadows by the Shadow Catcher
+    pass), the lamp and sky lit as the footage's shadows show, and the 3D
+    Views previewing the composite through the camera"""
     bl_idname = "clip.sunlapse_setup_ar"
     bl_label = "Set Up AR Render"
     bl_options = {"REGISTER", "UNDO"}
@@ -396,14 +545,104 @@ class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
     add_sample_object: bpy.props.BoolProperty(
         name="Add Sample Object", default=True,
         description="Drop a sample virtual object on the ground in view")
+    match_shadows: bpy.props.BoolProperty(
+        name="Match Shadows", default=True,
+        description="Render the model's own shadows once, small, and correct the light so "
+                    "that they come out as dark as the footage's (a few seconds)")
 
     def execute(self, context):
         try:
-            note = ar.setup(context, add_sample_object=self.add_sample_object)
+            warnings = []
+            note = ar.setup(context, add_sample_object=self.add_sample_object, warnings=warnings,
+                            match_shadows=self.match_shadows)
         except (bridge.SceneError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         self.report({"INFO"}, note)
+        for w in warnings:
+            self.report({"WARNING"}, w)
+        return {"FINISHED"}
+
+
+def frame_time_utc(settings, track, frame):
+    """The capture time (aware UTC) of `frame`: the track's own (times file,
+    EXIF) or the panel's date, start time and seconds per frame; None."""
+    est = track.frame(frame) if track is not None else None
+    if est is not None and est.time_utc:
+        return dt.datetime.fromisoformat(est.time_utc)
+    if not settings.date or settings.frame_seconds <= 0:
+        return None
+    try:
+        day = dt.date.fromisoformat(settings.date)
+    except ValueError:
+        return None
+    first = track.frames[0].frame if track is not None and track.frames else frame
+    start = exif.local_start(day, settings.start_hour, settings_zone(settings))
+    return (start + dt.timedelta(seconds=settings.frame_seconds * (frame - first))).astimezone(
+        dt.timezone.utc)
+
+
+def north_offset_known(track):
+    """How the track's azimuths relate to north: 'fitted' (physical
+    smoothing found north), 'given' (the Sun Position add-on's), or None
+    (azimuths are relative to the scene's +Y)."""
+    if track is None:
+        return None
+    if track.extra.get("sun_path_fit"):
+        return "fitted"
+    if track.north_offset_deg:
+        return "given"
+    return None
+
+
+class CLIP_OT_sunlapse_to_sun_position(bpy.types.Operator):
+    """Write the place, the current frame's date and time and the north
+    offset to Blender's Sun Position add-on (its lamp and sky then agree
+    with the estimate on this frame)"""
+    bl_idname = "clip.sunlapse_to_sun_position"
+    bl_label = "Write to Sun Position"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "sun_pos_properties", None) is not None
+
+    def execute(self, context):
+        import math
+        scene = context.scene
+        sp = getattr(scene, "sun_pos_properties", None)
+        if sp is None:
+            self.report({"ERROR"}, "The Sun Position add-on is not enabled (Preferences › "
+                                   "Add-ons › Lighting: Sun Position)")
+            return {"CANCELLED"}
+        settings = scene.sunlapse
+        track = results.load_track()
+        fit = track.extra.get("sun_path_fit") if track is not None else None
+        lat = fit["latitude_deg"] if fit else settings.latitude
+        lon = fit["longitude_deg"] if fit else settings.longitude
+        written = ["place"]
+        sp.latitude, sp.longitude = lat, lon
+        if track is not None and north_offset_known(track):
+            sp.north_offset = math.radians(((track.north_offset_deg + 180.0) % 360.0) - 180.0)
+            written.append("north")
+        try:
+            when = frame_time_utc(settings, track, scene.frame_current)
+            tz = settings_zone(settings)
+        except bridge.SceneError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if when is not None:
+            if fit and fit.get("time_offset_s"):
+                when += dt.timedelta(seconds=fit["time_offset_s"])
+            local = when.astimezone(tz)
+            sp.use_daylight_savings = False  # the zone's offset already includes it
+            sp.UTC_zone = exif.utc_offset_hours(tz, when)
+            sp.year, sp.month, sp.day = local.year, local.month, local.day
+            sp.time = local.hour + local.minute / 60 + (local.second + local.microsecond * 1e-6) / 3600
+            written.append(f"{local:%Y-%m-%d %H:%M:%S} UTC{sp.UTC_zone:+g}")
+        self.report({"INFO"}, f"Sun Position: {', '.join(written)} (lat {lat:.4f}, lon {lon:.4f})"
+                    + ("" if when is not None else "; no time known for this frame (Frame "
+                                                   "Times, EXIF or Date and Seconds per Frame)"))
         return {"FINISHED"}
 
 
@@ -488,6 +727,11 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         cam.lens = r["focal_px"] * 36.0 / (w if w >= h else h)
         from mathutils import Matrix
         cam_obj.matrix_world = Matrix([list(row) for row in r["matrix_world"]])
+        # The clip's own tracking camera too, as Blender's solver fills it.
+        tc = clip.tracking.camera
+        tc.sensor_width = 36.0
+        tc.units = "MILLIMETERS"
+        tc.focal_length = cam.lens
         scene.render.resolution_x, scene.render.resolution_y = w, h
         scene.render.resolution_percentage = 100
         scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
@@ -500,6 +744,15 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
 
 
 classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun,
-           CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export,
-           CLIP_OT_sunlapse_setup_ar)
-register, unregister = bpy.utils.register_classes_factory(classes)
+           CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_cancel, CLIP_OT_sunlapse_apply_lamp,
+           CLIP_OT_sunlapse_export, CLIP_OT_sunlapse_setup_ar, CLIP_OT_sunlapse_to_sun_position)
+_register, _unregister = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register()
+
+
+def unregister():
+    RUN.update(running=False, cancel=True)
+    _unregister()

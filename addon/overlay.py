@@ -1,8 +1,10 @@
 """Draws the stored Sun track over the clip in the Movie Clip Editor.
 
 On the current frame: the tracked shadow (caster foot to shadow tip), its
-ends, and the confidence; in the lower-left corner, a small plot of zenith
-(orange) and azimuth (blue) over the clip with the current frame marked.
+ends, and its labelled confidence; at the bottom, on a dark box, a plot over
+the clip: elevation and azimuth (each on its own axis, in degrees, titled
+with what the azimuth is measured from) and the confidence, with the current
+frame marked and its values written under it (Plot over Clip turns it off).
 """
 
 import bpy
@@ -37,23 +39,113 @@ def _track():
     return _cache["track"]
 
 
-def _series_plot(track, frame, x0, y0, w, h):
-    """Polylines of the plot: (points, colour) pairs, in region pixels."""
+# Plot colours: elevation orange, azimuth blue, confidence grey-green.
+ELEVATION_COLOR = (1.0, 0.6, 0.1, 1.0)
+AZIMUTH_COLOR = (0.35, 0.65, 1.0, 1.0)
+CONFIDENCE_COLOR = (0.55, 0.85, 0.55, 1.0)
+PLOT_BACK = (0.0, 0.0, 0.0, 0.6)
+PLOT_GAP = 16  # pixels between strips, for their titles
+
+
+def nice_range(lo, hi, min_span=2.0):
+    """Axis limits around [lo, hi] on round degrees, at least min_span wide."""
+    import math
+    mid, span = (lo + hi) / 2, max(hi - lo, min_span)
+    step = 10 ** math.floor(math.log10(span / 2))
+    for m in (1, 2, 5, 10):
+        if span / (m * step) <= 4:
+            step *= m
+            break
+    return math.floor((mid - span / 2) / step) * step, math.ceil((mid + span / 2) / step) * step
+
+
+def plot_layout(track, frame, x0, y0, w, h):
+    """What the plot draws, in region pixels, as plain data (tested without
+    a GPU): strips of (title, colour, (lo, hi), points), the frame marker x,
+    and the current frame's values. Elevation and azimuth (as the panel
+    shows them) each get a strip with its own degree axis; confidence 0..1."""
     est = [f for f in track.frames if f.has_estimate]
     if len(est) < 2:
-        return []
+        return None
     f0, f1 = track.frames[0].frame, track.frames[-1].frame
     span = max(1, f1 - f0)
-    out = []
-    for key, color in (("zenith_deg", (1.0, 0.6, 0.1, 1.0)), ("azimuth_deg", (0.3, 0.6, 1.0, 1.0))):
-        vals = [getattr(f, key) for f in est]
-        lo, hi = min(vals), max(vals)
-        rng = max(1e-6, hi - lo)
-        pts = [(x0 + w * (f.frame - f0) / span, y0 + h * (getattr(f, key) - lo) / rng) for f in est]
-        out.append((pts, color))
-    xm = x0 + w * (frame - f0) / span
-    out.append(([(xm, y0), (xm, y0 + h)], (1, 1, 1, 0.8)))
-    return out
+    north = track.extra.get("sun_path_fit") is not None or bool(track.north_offset_deg)
+
+    def az(f):
+        return f.azimuth_deg % 360 if north else (f.azimuth_deg + track.north_offset_deg) % 360
+    series = (("Elevation", ELEVATION_COLOR, [90.0 - f.zenith_deg for f in est]),
+              ("Azimuth " + ("from north" if north else "from +Y"), AZIMUTH_COLOR,
+               [az(f) for f in est]))
+    gap = PLOT_GAP
+    strip_h = (h - 3 * gap) / 3  # each strip's title sits in the gap above it
+    strips = []
+    for k, (title, color, vals) in enumerate(series):
+        lo, hi = nice_range(min(vals), max(vals))
+        sy = y0 + h - (k + 1) * (strip_h + gap)
+        pts = [(x0 + w * (f.frame - f0) / span, sy + strip_h * (v - lo) / (hi - lo))
+               for f, v in zip(est, vals)]
+        strips.append((title + " (°)", color, (lo, hi), pts, sy, strip_h))
+    sy = y0
+    conf = [(x0 + w * (f.frame - f0) / span, sy + strip_h * max(0.0, min(1.0, f.confidence)))
+            for f in track.frames]
+    strips.append(("Confidence (0-1)", CONFIDENCE_COLOR, (0.0, 1.0), conf, sy, strip_h))
+    cur = track.frame(frame)
+    values = None
+    if cur is not None and cur.has_estimate:
+        values = (90.0 - cur.zenith_deg, az(cur), cur.confidence)
+    return {"strips": strips, "marker_x": x0 + w * (min(max(frame, f0), f1) - f0) / span,
+            "frames": (f0, f1), "values": values, "box": (x0, y0, w, h)}
+
+
+def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
+    scale = bpy.context.preferences.system.ui_scale
+    left = 46 * scale                       # room for the degree labels
+    w = min(520 * scale, region.width - left - 30 * scale)
+    h = 190 * scale
+    x0, y0 = left + 10 * scale, 30 * scale
+    plot = plot_layout(track, frame, x0, y0, w, h)
+    if plot is None or w < 80:
+        return
+    # A dark box behind the plot keeps it readable over any footage.
+    bx0, by0, bx1, by1 = x0 - left, y0 - 22 * scale, x0 + w + 12 * scale, y0 + h + 8 * scale
+    shader.bind()
+    shader.uniform_float("color", PLOT_BACK)
+    batch_for_shader(shader, "TRIS", {"pos": [(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by0),
+                                             (bx1, by1), (bx0, by1)]}).draw(shader)
+    size = int(11 * scale)
+    blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
+    for title, color, (lo, hi), pts, sy, sh in plot["strips"]:
+        shader.uniform_float("color", (1, 1, 1, 0.25))
+        batch_for_shader(shader, "LINES", {"pos": [(x0, sy), (x0 + w, sy), (x0, sy + sh),
+                                                  (x0 + w, sy + sh), (x0, sy), (x0, sy + sh)]}
+                         ).draw(shader)
+        shader.uniform_float("color", color)
+        batch_for_shader(shader, "LINE_STRIP", {"pos": pts}).draw(shader)
+        blf.color(0, *color)
+        blf.position(0, x0 + 2 * scale, sy + sh + 4, 0)
+        blf.draw(0, title)
+        blf.color(0, 0.85, 0.85, 0.85, 1.0)
+        for v, y in ((lo, sy), (hi, sy + sh - size * 0.75)):
+            label = f"{v:.1f}" if hi <= 1.0 else f"{v:.0f}°"
+            blf.position(0, x0 - left + 4 * scale, y, 0)
+            blf.draw(0, label)
+    xm = plot["marker_x"]
+    shader.uniform_float("color", (1, 1, 1, 0.9))
+    batch_for_shader(shader, "LINES", {"pos": [(xm, y0), (xm, y0 + h)]}).draw(shader)
+    f0, f1 = plot["frames"]
+    blf.color(0, 0.85, 0.85, 0.85, 1.0)
+    blf.position(0, x0, y0 - 16 * scale, 0)
+    blf.draw(0, f"frame {f0}")
+    text = f"frame {f1}"
+    blf.position(0, x0 + w - blf.dimensions(0, text)[0], y0 - 16 * scale, 0)
+    blf.draw(0, text)
+    if plot["values"] is not None:
+        el, az, conf = plot["values"]
+        text = f"{frame}: el {el:.1f}°  az {az:.1f}°  conf {conf:.2f}"
+        tw = blf.dimensions(0, text)[0]
+        blf.color(0, 1, 1, 1, 1)
+        blf.position(0, min(max(x0, xm - tw / 2), x0 + w - tw), y0 - 16 * scale, 0)
+        blf.draw(0, text)
 
 
 def _draw():
@@ -87,13 +179,14 @@ def _draw():
         gpu.state.point_size_set(7.0)
         batch_for_shader(shader, "POINTS", {"pos": [a, b]}).draw(shader)
         blf.position(0, b[0] + 8, b[1] + 8, 0)
-        blf.size(0, 12)
-        blf.draw(0, f"{est.confidence:.2f}" if est.reason is None else est.reason[:40])
-    lines = _series_plot(track, frame, 20, 45, min(260, region.width * 0.3), 70)
-    for pts, color in lines:
-        shader.bind()
-        shader.uniform_float("color", color)
-        batch_for_shader(shader, "LINE_STRIP", {"pos": pts}).draw(shader)
+        blf.size(0, 12) if bpy.app.version >= (4, 0, 0) else blf.size(0, 12, 72)
+        blf.color(0, 1, 1, 1, 1)
+        blf.draw(0, f"shadow tracked, confidence {est.confidence:.2f}" if est.reason is None
+                 else est.reason[:60])
+    settings = getattr(context.scene, "sunlapse", None)
+    if settings is None or settings.show_plot:
+        gpu.state.line_width_set(1.5)
+        _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu)
     gpu.state.line_width_set(1.0)
     gpu.state.blend_set("NONE")
 

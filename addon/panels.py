@@ -1,11 +1,140 @@
-"""Sidebar panels: Movie Clip Editor › Sun and 3D View › Sun."""
+"""Sidebar panels: Movie Clip Editor › Sun and 3D View › Sun.
+
+A parent panel with the current frame's Sun and sub-panels in the order of
+the work (Scene, Estimate, Smoothing / Place and Time, Lamp and Render,
+Export), laid out like Blender's Sun Position add-on: property labels in a
+column of their own (use_property_split), short enough for the default
+sidebar width.
+"""
 
 import bpy
 
 from . import native_loader
 
 
-def draw_sun_panel(layout, context):
+def _wrap(text, width_px, measure):
+    """Words of `text` in lines no wider than width_px by `measure`."""
+    lines, line = [], ""
+    for word in text.split():
+        trial = f"{line} {word}" if line else word
+        if line and measure(trial) > width_px:
+            lines.append(line)
+            line = word
+        else:
+            line = trial
+    if line:
+        lines.append(line)
+    return lines
+
+
+def wrapped(layout, context, text, icon="NONE", max_lines=6):
+    """A long message as several labels, broken at the panel's width (a
+    single label would be cut after a few words)."""
+    import blf
+    region = getattr(context, "region", None)
+    scale = context.preferences.system.ui_scale
+    width = (region.width if region is not None else 300) - 72 * scale \
+        - (20 * scale if icon != "NONE" else 0)
+    size = context.preferences.ui_styles[0].widget_label.points * scale
+    if bpy.app.version >= (4, 0, 0):
+        blf.size(0, size)
+    else:
+        blf.size(0, size, 72)
+    lines = _wrap(text, width, lambda t: blf.dimensions(0, t)[0])
+    col = layout.column(align=True)
+    for k, line in enumerate(lines[:max_lines]):
+        if k == max_lines - 1 and len(lines) > max_lines:
+            line = line[:-3] + "..."
+        col.label(text=line, icon=icon if k == 0 else "BLANK1" if icon != "NONE" else "NONE")
+    return col
+
+
+def _split(layout):
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    return layout
+
+
+def _running():
+    from . import operators
+    return operators.RUN
+
+
+def angles_text(track, est, north_state):
+    """(elevation line, azimuth line) as the Sun Position add-on shows them:
+    elevation above the horizon, azimuth clockwise from north (geographic)
+    when north is known, else from the scene's +Y."""
+    elevation = 90.0 - est.zenith_deg
+    if north_state:
+        az = f"Azimuth {est.azimuth_deg % 360:.1f}° from north"
+    else:
+        az = f"Azimuth {(est.azimuth_deg + track.north_offset_deg) % 360:.1f}° from +Y"
+    return f"Elevation {elevation:.1f}°", az
+
+
+def draw_sun_summary(layout, context):
+    """The stored track on the current frame: elevation, azimuth, north
+    offset, confidence, or why the frame has none."""
+    from . import operators, results
+    track = results.load_track()
+    if track is None:
+        layout.label(text="No estimate yet", icon="INFO")
+        return
+    frame = context.scene.frame_current
+    est = track.frame(frame)
+    col = layout.column(align=True)
+    if est is None:
+        col.label(text=f"Frame {frame} is outside the track", icon="INFO")
+        return
+    north = operators.north_offset_known(track)
+    if est.has_estimate:
+        el, az = angles_text(track, est, north)
+        col.label(text=el, icon="LIGHT_SUN")
+        col.label(text=az, icon="ORIENTATION_GLOBAL" if north else "ORIENTATION_LOCAL")
+        n = ((track.north_offset_deg + 180.0) % 360.0) - 180.0
+        col.label(text=f"North offset {n:.1f}° ({north})" if north else
+                  "North unknown (offset 0°)", icon="BLANK1")
+        col.label(text=f"Confidence {est.confidence:.2f}"
+                  + ("" if est.raw_zenith_deg is not None else " (smoothed)"), icon="BLANK1")
+    if est.reason:
+        wrapped(col, context, est.reason, icon="INFO", max_lines=3)
+
+
+def draw_progress(layout):
+    """Blender 4.0+'s progress widget, else a label, and a cancel button."""
+    run = _running()
+    row = layout.row(align=True)
+    text = "Cancelling" if run["cancel"] else f"Estimating {100 * run['fraction']:.0f}%"
+    if hasattr(row, "progress"):
+        row.progress(factor=run["fraction"], type="BAR", text=text)
+    else:
+        row.label(text=text, icon="TIME")
+    row.operator("clip.sunlapse_cancel", text="", icon="CANCEL")
+
+
+class _Panel:
+    bl_region_type = "UI"
+    bl_category = "Sun"
+
+    @classmethod
+    def poll(cls, context):
+        sd = context.space_data  # the clip editor's mask mode is not ours
+        return sd is not None and getattr(sd, "mode", "TRACKING") == "TRACKING"
+
+
+class _Sub(_Panel):
+    @classmethod
+    def poll(cls, context):
+        return _Panel.poll.__func__(cls, context) and native_loader._native is not None
+
+
+# Draws of the parent panel per space type (the UI tests wait for it).
+DRAWN = {}
+
+
+def draw_main(self, context):
+    DRAWN[self.bl_space_type] = DRAWN.get(self.bl_space_type, 0) + 1
+    layout = self.layout
     if native_loader._native is None:
         box = layout.box()
         box.alert = True
@@ -15,88 +144,137 @@ def draw_sun_panel(layout, context):
             for part in textwrap.wrap(line, 60):
                 box.label(text=part)
         return
-    settings = context.scene.sunlapse
+    if _running()["running"]:
+        draw_progress(layout)
+    draw_sun_summary(layout, context)
+
+
+def draw_scene(self, context):
+    layout = _split(self.layout)
+    s = context.scene.sunlapse
     col = layout.column()
-    col.prop(settings, "model_collection")
-    col.prop(settings, "camera")
-    col.prop(settings, "ground_objects")
-    col.prop(settings, "method")
-    col.prop(settings, "smoothing")
-    col.prop(settings, "times_file")
-    if settings.smoothing == "physical":
-        box = col.box()
-        if getattr(context.scene, "sun_pos_properties", None) is not None and not settings.date:
-            box.label(text="Place and time: Sun Position add-on", icon="INFO")
-        names = ("latitude", "fit_latitude", "longitude", "utc_offset") if settings.times_file \
-            else ("latitude", "fit_latitude", "longitude", "date", "start_hour", "utc_offset",
-                  "frame_seconds")
-        for name in names:
-            box.prop(settings, name)
-    col.prop(settings, "ignore_top_rows")
-    row = col.row(align=True)
-    row.prop(settings, "use_frame_range", text="")
-    sub = row.row(align=True)
-    sub.active = settings.use_frame_range
-    sub.prop(settings, "frame_start")
-    sub.prop(settings, "frame_end")
-    layout.operator("clip.sunlapse_solve_camera", icon="CAMERA_DATA")
-    layout.operator("clip.sunlapse_check_scene", icon="CHECKMARK")
-    layout.operator("clip.sunlapse_estimate", icon="LIGHT_SUN")
-    layout.operator("clip.sunlapse_initial_sun", icon="LIGHT_SUN")
-    box = layout.box()
-    box.prop(settings, "sun_lamp")
-    box.prop(settings, "sync_sky")
-    box.prop(settings, "keyframe_strength")
-    box.operator("clip.sunlapse_apply_lamp", icon="KEYINGSET")
-    box.operator("clip.sunlapse_setup_ar", icon="RENDER_ANIMATION")
-    box.operator("clip.sunlapse_export", icon="EXPORT")
-    if settings.last_report:
-        layout.label(text=settings.last_report[:120])
-    draw_track_summary(layout, context)
-
-
-def draw_track_summary(layout, context):
-    """The stored track on the current frame: angles, confidence, or why not."""
-    from . import results
-    track = results.load_track()
-    if track is None:
-        return
-    est = track.frame(context.scene.frame_current)
+    col.prop(s, "model_collection")
+    col.prop(s, "camera")
+    col.prop(s, "ground_object")
+    col.prop(s, "ground_objects", text="Others")
+    col.prop(s, "ignore_top_rows", text="Top Rows")
     col = layout.column(align=True)
-    if est is None:
-        col.label(text="Current frame is outside the track")
-        return
-    if est.has_estimate:
-        col.label(text=f"Zenith {est.zenith_deg:.2f}°  Azimuth {est.azimuth_deg:.2f}°")
-        col.label(text=f"Confidence {est.confidence:.2f}")
-    if est.reason:
-        col.label(text=est.reason[:80], icon="INFO")
+    col.operator("clip.sunlapse_solve_camera", text="Solve Camera", icon="CAMERA_DATA")
+    col.operator("clip.sunlapse_check_scene", icon="CHECKMARK")
+    if s.last_report:
+        wrapped(layout, context, s.last_report)
 
 
-class CLIP_PT_sunlapse(bpy.types.Panel):
-    bl_space_type = "CLIP_EDITOR"
-    bl_region_type = "UI"
-    bl_category = "Sun"
-    bl_label = "sunlapse"
+def draw_estimate(self, context):
+    from . import bridge
+    layout = _split(self.layout)
+    s = context.scene.sunlapse
+    layout.prop(s, "method")
+    clip = bridge.active_movieclip(context)
+    col = layout.column(heading="Frames", align=True)
+    col.prop(s, "use_frame_range", text="Only a Range")
+    if s.use_frame_range:
+        col.prop(s, "frame_start", text="Start")
+        col.prop(s, "frame_end", text="End")
+    elif clip is not None:
+        end = clip.frame_start + clip.frame_duration - 1
+        row = layout.row()
+        row.alignment = "RIGHT"
+        row.label(text=f"Whole clip: {clip.frame_start}-{end} ({clip.frame_duration})")
+    layout.prop(s, "times_file", text="Times File")
+    if clip is not None and clip.source == "SEQUENCE":
+        layout.prop(s, "use_exif_times")
+    col = layout.column(align=True)
+    col.use_property_split = False
+    run = _running()
+    if run["running"]:
+        draw_progress(col)
+    sub = col.row(align=True)
+    sub.enabled = not run["running"]  # one run at a time
+    sub.scale_y = 1.4
+    sub.operator("clip.sunlapse_estimate", icon="LIGHT_SUN")
+    sub = col.row(align=True)
+    sub.enabled = not run["running"]
+    sub.operator("clip.sunlapse_initial_sun", text="Current Frame Only", icon="LIGHT_SUN")
 
-    @classmethod
-    def poll(cls, context):
-        sd = context.space_data
-        return sd is not None and getattr(sd, "mode", "TRACKING") == "TRACKING"
 
-    def draw(self, context):
-        draw_sun_panel(self.layout, context)
+def draw_place(self, context):
+    layout = _split(self.layout)
+    s = context.scene.sunlapse
+    layout.prop(s, "smoothing")
+    sp = getattr(context.scene, "sun_pos_properties", None)
+    physical = s.smoothing == "physical"
+    col = layout.column(align=True)
+    col.active = physical
+    col.prop(s, "latitude")
+    col.prop(s, "longitude")
+    col.prop(s, "fit_latitude", text="Fit Latitude")
+    col = layout.column(align=True)
+    col.active = physical
+    from . import bridge
+    clip = bridge.active_movieclip(context)
+    times_known = bool(s.times_file) or (
+        s.use_exif_times and clip is not None and clip.source == "SEQUENCE")
+    if not s.times_file:
+        col.prop(s, "date")
+        col.prop(s, "start_hour", text="Start Time")
+        col.prop(s, "frame_seconds", text="Interval (s)")
+    col.prop(s, "time_zone")
+    sub = col.row()
+    sub.active = physical and not s.time_zone
+    sub.prop(s, "utc_offset")
+    if physical and sp is not None and not s.date and not times_known:
+        layout.label(text="Place and time: Sun Position add-on", icon="INFO")
+    row = layout.row()
+    row.enabled = sp is not None
+    row.operator("clip.sunlapse_to_sun_position", icon="EXPORT")
 
 
-class VIEW3D_PT_sunlapse(bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Sun"
-    bl_label = "sunlapse"
+def draw_lamp(self, context):
+    layout = _split(self.layout)
+    s = context.scene.sunlapse
+    layout.prop(s, "sun_lamp")
+    col = layout.column(heading="Keyframe", align=True)
+    col.prop(s, "sync_sky", text="Sky")
+    col.prop(s, "keyframe_strength", text="Strength")
+    col = layout.column(align=True)
+    col.operator("clip.sunlapse_apply_lamp", icon="KEYINGSET")
+    if s.last_apply:
+        wrapped(col, context, s.last_apply, icon="CHECKMARK", max_lines=3)
+    layout.operator("clip.sunlapse_setup_ar", icon="RENDER_ANIMATION")
+    layout.prop(s, "show_plot")
 
-    def draw(self, context):
-        draw_sun_panel(self.layout, context)
+
+def draw_export(self, context):
+    self.layout.operator("clip.sunlapse_export", icon="EXPORT")
 
 
-classes = (CLIP_PT_sunlapse, VIEW3D_PT_sunlapse)
-register, unregister = bpy.utils.register_classes_factory(classes)
+_SECTIONS = (("scene", "Scene", draw_scene, False),
+             ("estimate", "Estimate", draw_estimate, False),
+             ("place", "Smoothing / Place and Time", draw_place, False),
+             ("lamp", "Lamp and Render", draw_lamp, False),
+             ("export", "Export", draw_export, True))
+
+
+def _make_classes():
+    out = []
+    for space, prefix in (("CLIP_EDITOR", "CLIP"), ("VIEW_3D", "VIEW3D")):
+        parent_id = f"{prefix}_PT_sunlapse"
+        out.append(type(parent_id, (_Panel, bpy.types.Panel), {
+            "bl_idname": parent_id, "bl_space_type": space, "bl_label": "sunlapse",
+            "draw": draw_main}))
+        for key, label, draw, closed in _SECTIONS:
+            idname = f"{prefix}_PT_sunlapse_{key}"
+            attrs = {"bl_idname": idname, "bl_space_type": space, "bl_label": label,
+                     "bl_parent_id": parent_id, "draw": draw}
+            if closed:
+                attrs["bl_options"] = {"DEFAULT_CLOSED"}
+            out.append(type(idname, (_Sub, bpy.types.Panel), attrs))
+    return tuple(out)
+
+
+classes = _make_classes()
+_register, _unregister = bpy.utils.register_classes_factory(classes)
+
+
+register, unregister = _register, _unregister

@@ -9,6 +9,26 @@ def _is_camera(self, obj):
     return obj.type == "CAMERA"
 
 
+def _is_mesh(self, obj):
+    return obj.type == "MESH"
+
+
+def _clip_range(context):
+    from . import bridge
+    clip = bridge.active_movieclip(context)
+    if clip is None:
+        return None
+    return int(clip.frame_start), int(clip.frame_start + clip.frame_duration - 1)
+
+
+def _use_frame_range_update(self, context):
+    """Turning the range on starts it at the clip's real frames."""
+    r = _clip_range(context)
+    if self.use_frame_range and r is not None and not (
+            r[0] <= self.frame_start <= self.frame_end <= r[1]):
+        self.frame_start, self.frame_end = r
+
+
 def _is_sun_lamp(self, obj):
     return obj.type == "LIGHT" and obj.data.type == "SUN"
 
@@ -21,10 +41,12 @@ class SunlapseSettings(bpy.types.PropertyGroup):
     camera: PointerProperty(
         name="Camera", type=bpy.types.Object, poll=_is_camera,
         description="Camera matched to the footage; empty: the scene camera")
+    ground_object: PointerProperty(
+        name="Ground", type=bpy.types.Object, poll=_is_mesh,
+        description="The ground the shadows fall on; empty: detected automatically")
     ground_objects: StringProperty(
-        name="Ground",
-        description="Comma-separated names of the ground object(s) the shadows "
-                    "fall on; empty: detected automatically")
+        name="Other Ground",
+        description="More ground objects, comma-separated names (any case)")
     sun_lamp: PointerProperty(
         name="Sun Lamp", type=bpy.types.Object, poll=_is_sun_lamp,
         description="Sun lamp to drive; empty: a new one is created")
@@ -35,7 +57,7 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         default="default")
     ignore_top_rows: IntProperty(
         name="Ignore Top Rows", min=0, default=0,
-        description="Rows at the top of the frame that are not scene content "
+        description="Rows at the top of the frame to ignore: not scene content "
                     "(burned-in time stamps, banners)")
     smoothing: EnumProperty(
         name="Smoothing",
@@ -52,7 +74,18 @@ class SunlapseSettings(bpy.types.PropertyGroup):
     start_hour: FloatProperty(name="Start Time", min=0, max=24, default=12.0, subtype="TIME",
                               description="Local time of the first frame, hours")
     utc_offset: FloatProperty(name="UTC Offset", min=-14, max=14, default=0.0,
-                              description="Hours between local time and UTC")
+                              description="Hours between local time and UTC (used when "
+                                          "Time Zone is empty)")
+    time_zone: StringProperty(
+        name="Time Zone", default="",
+        description="IANA time zone of the local times (Europe/Paris, America/New_York): "
+                    "daylight saving is then applied on each frame's date. Empty: the UTC "
+                    "offset")
+    use_exif_times: BoolProperty(
+        name="EXIF Times", default=True,
+        description="Image sequences: read each frame's capture time (DateTimeOriginal, "
+                    "sub-seconds) and GPS position from its EXIF data when no times file "
+                    "is given")
     fit_latitude: BoolProperty(
         name="Fit Latitude", default=True,
         description="Physical smoothing also fits the latitude near the given one; off: "
@@ -65,7 +98,7 @@ class SunlapseSettings(bpy.types.PropertyGroup):
                     "times use the UTC offset): frames are tracked in the order they were "
                     "taken and smoothed over real time. Empty: evenly spaced frames")
     use_frame_range: BoolProperty(
-        name="Frame Range", default=False,
+        name="Frame Range", default=False, update=_use_frame_range_update,
         description="Estimate only these frames (default: the whole clip)")
     frame_start: IntProperty(name="Start", default=1)
     frame_end: IntProperty(name="End", default=250)
@@ -77,6 +110,10 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         name="Sync Sky", default=True,
         description="Also keyframe the world's Nishita Sky Texture from the track")
     last_report: StringProperty(name="Last check", default="")
+    last_apply: StringProperty(name="Last apply", default="")
+    show_plot: BoolProperty(name="Plot over Clip", default=True,
+                            description="Draw the elevation/azimuth/confidence plot over "
+                                        "the clip in the Movie Clip Editor")
 
 
 classes = (SunlapseSettings,)

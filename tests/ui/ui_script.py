@@ -1,7 +1,10 @@
 """Driven inside a Blender with a real window (tests/ui/test_ui.py):
   blender --factory-startup [--enable-event-simulate] SCENE.blend --python ui_script.py -- MODE OUT
-MODE: modal (run Estimate Sun as a click does, wait, apply, screenshot) or
-esc (start it and press Esc at once). Prints RESULT lines for the test."""
+MODE: modal (run Estimate Sun as a click does, wait, apply, screenshot), esc
+(start it and press Esc at once) or walkthrough (the artist's steps, one
+screenshot each into the folder OUT, with what the test checks beside them).
+Prints RESULT lines for the test."""
+import json
 import os
 import sys
 
@@ -13,10 +16,14 @@ import run_estimate  # noqa: E402
 
 sunlapse = run_estimate.load_sunlapse()
 sunlapse.register()
-from sunlapse import results  # noqa: E402
+from sunlapse import operators, panels, results  # noqa: E402
 
 mode, out = sys.argv[sys.argv.index("--") + 1:][:2]
 state = {"polls": 0}
+
+
+def result(key, value):
+    print(f"RESULT {key} {value}", flush=True)
 
 
 def clip_area():
@@ -32,7 +39,7 @@ def start():
     win, area, region = clip_area()
     bpy.context.scene.frame_set(2)
     with bpy.context.temp_override(window=win, area=area, region=region):
-        print("RESULT invoke", bpy.ops.clip.sunlapse_estimate("INVOKE_DEFAULT"), flush=True)
+        result("invoke", bpy.ops.clip.sunlapse_estimate("INVOKE_DEFAULT"))
     if mode == "esc":
         for value in ("PRESS", "RELEASE"):
             win.event_simulate(type="ESC", value=value, x=area.x + 50, y=area.y + 50)
@@ -43,16 +50,17 @@ def poll():
     state["polls"] += 1
     track = results.load_track()
     if mode == "esc":
-        if state["polls"] < 8:
+        if operators.RUN["running"] and state["polls"] < 60:
             return 0.5
-        print("RESULT stored", track is not None, flush=True)
+        result("stored", track is not None)
+        result("outcome", json.dumps(operators.RUN["outcome"]))
         bpy.ops.wm.quit_blender()
         return None
     if track is None and state["polls"] < 120:
         return 0.5
-    print("RESULT stored", track is not None, flush=True)
+    result("stored", track is not None)
     if track is not None:
-        print("RESULT apply", bpy.ops.clip.sunlapse_apply_lamp(), flush=True)
+        result("apply", bpy.ops.clip.sunlapse_apply_lamp())
         bpy.app.timers.register(shot, first_interval=1.0)
     else:
         bpy.ops.wm.quit_blender()
@@ -61,9 +69,310 @@ def poll():
 
 def shot():
     bpy.ops.screen.screenshot(filepath=out)  # the overlay draws in this redraw
-    print("RESULT screenshot", os.path.exists(out), flush=True)
+    result("screenshot", os.path.exists(out))
     bpy.ops.wm.quit_blender()
 
 
-bpy.app.timers.register(start, first_interval=2.0)
-bpy.app.timers.register(poll, first_interval=3.0)
+# ---------------------------------------------------------------------------
+# The walkthrough: each step leaves OUT/NN_name.png and a record in
+# OUT/steps.json of the regions the test checks (window pixels, y up).
+
+steps = []
+
+
+def region_rect(area, kind):
+    r = next(r for r in area.regions if r.type == kind)
+    return [r.x, r.y, r.width, r.height]
+
+
+def statusbar_rect(win):
+    """The status bar (a global area, not in screen.areas): the window's
+    bottom strip."""
+    scale = bpy.context.preferences.system.ui_scale
+    return [0, 0, win.width, int(22 * scale)]
+
+
+def snap(name, **facts):
+    path = os.path.join(out, f"{len(steps) + 1:02d}_{name}.png")
+    bpy.ops.screen.screenshot(filepath=path)
+    steps.append(dict(name=name, path=path, **facts))
+    result("step", name)
+
+
+def label_fits():
+    """Every label, button and property name the sub-panels draw, measured
+    with the UI font against the room the sidebar gives it at its width:
+    [(text, needed px, available px)] of those that would be cut."""
+    import blf
+    win, area, _ = clip_area()
+    region = next(r for r in area.regions if r.type == "UI")
+    scale = bpy.context.preferences.system.ui_scale
+    style = bpy.context.preferences.ui_styles[0].widget_label
+    size = style.points * scale
+    blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
+    unit = 20 * scale
+    # The sidebar keeps a tab column and panel margins; sub-panels indent.
+    content = region.width - 1.2 * unit - 1.6 * unit
+    cut = []
+
+    class Rec:
+        """Stands in for UILayout: records what would be drawn and where."""
+
+        def __init__(self, width, split=False):
+            self.width, self.use_property_split, self.use_property_decorate = width, split, False
+            self.enabled = self.active = self.alert = True
+            self.alignment, self.scale_y, self.scale_x = "EXPAND", 1.0, 1.0
+            self._n = 1
+
+        def _child(self, width=None):
+            return Rec(self.width if width is None else width, self.use_property_split)
+
+        def column(self, **kw):
+            return self._child()
+
+        def box(self):
+            return self._child(self.width - 0.5 * unit)
+
+        def row(self, **kw):
+            r = self._child()
+            r._row = True
+            return r
+
+        def split(self, factor=0.5, **kw):
+            return self._child(self.width * factor)
+
+        def _need(self, text, icon, avail):
+            need = blf.dimensions(0, text)[0] + (unit if icon not in (None, "NONE") else 0) \
+                + 0.3 * unit
+            if need > avail + 0.5:
+                cut.append((text, round(need), round(avail)))
+
+        def label(self, text="", icon="NONE", **kw):
+            self._need(text, icon, self.width)
+
+        def operator(self, idname, text=None, icon="NONE", **kw):
+            if text is None:
+                mod, name = idname.split(".")
+                text = getattr(getattr(bpy.ops, mod), name).get_rna_type().name
+            self._need(text, icon, self.width)
+
+        def prop(self, data, name, text=None, icon="NONE", **kw):
+            p = data.bl_rna.properties[name]
+            text = p.name if text is None else text
+            if not text:
+                return
+            if p.type == "BOOLEAN":  # beside its checkbox, in the value column
+                avail = (0.6 * self.width if self.use_property_split else self.width) - unit
+            elif self.use_property_split:
+                avail = 0.4 * self.width
+            else:
+                avail = 0.45 * self.width
+            self._need(text, icon, avail)
+
+        def progress(self, text="", **kw):
+            self._need(text, "NONE", self.width - unit)
+
+    class FakePanel:
+        pass
+
+    ctx_region = region
+    running = dict(operators.RUN)
+    operators.RUN.update(running=True, fraction=0.38, cancel=False)  # its progress row too
+    fp = FakePanel()
+    fp.layout = Rec(content)
+    panels.draw_progress(fp.layout)
+    operators.RUN.update(running)
+    for section in panels._SECTIONS:
+        fp = FakePanel()
+        fp.layout = Rec(content)
+        with bpy.context.temp_override(window=win, area=area, region=ctx_region):
+            section[2](fp, bpy.context)
+    return cut, region.width
+
+
+def sun_tab(then, tries=[0]):
+    """Ctrl+Wheel over the sidebar cycles its tabs (Blender 3.4 has no
+    property for the active one) until the Sun panel draws."""
+    win, area, _ = clip_area()
+    ui = next(r for r in area.regions if r.type == "UI")
+    before = panels.DRAWN.get("CLIP_EDITOR", 0)
+
+    def check():
+        if panels.DRAWN.get("CLIP_EDITOR", 0) > before:
+            result("sun_tab", tries[0])
+            bpy.app.timers.register(then, first_interval=0.3)
+            return None
+        tries[0] += 1
+        if tries[0] > 8:
+            result("sun_tab", "not found")
+            bpy.ops.wm.quit_blender()
+            return None
+        win.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=ui.x + ui.width // 2,
+                           y=ui.y + ui.height // 2, ctrl=True)
+        nonlocal_before[0] = panels.DRAWN.get("CLIP_EDITOR", 0)
+        return 0.4
+    nonlocal_before = [before]
+
+    def check2():
+        if panels.DRAWN.get("CLIP_EDITOR", 0) > nonlocal_before[0]:
+            result("sun_tab", tries[0])
+            bpy.app.timers.register(then, first_interval=0.3)
+            return None
+        return check()
+    bpy.app.timers.register(check2, first_interval=0.5)
+    return None
+
+
+def walkthrough():
+    win, area, region = clip_area()
+    scene = bpy.context.scene
+    scene.frame_set(2)
+    return sun_tab(walkthrough_steps)
+
+
+def walkthrough_steps():
+    win, area, region = clip_area()
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        bpy.ops.clip.view_all(fit_view=True)
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        result("check", bpy.ops.clip.sunlapse_check_scene())
+    cut, width = label_fits()
+    result("sidebar_width", width)
+    result("cut_labels", json.dumps(cut))
+    bpy.app.timers.register(step_scene, first_interval=0.5)
+    return None
+
+
+def step_scene():
+    win, area, region = clip_area()
+    snap("scene_checked", sidebar=region_rect(area, "UI"),
+         report=bpy.context.scene.sunlapse.last_report)
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        result("invoke", bpy.ops.clip.sunlapse_estimate("INVOKE_DEFAULT"))
+        # A second start while the first runs is refused.
+        try:
+            second = bpy.ops.clip.sunlapse_estimate("INVOKE_DEFAULT")
+        except RuntimeError as e:
+            second = f"error: {e}"
+        result("second_invoke", second)
+    bpy.app.timers.register(step_running, first_interval=0.3)
+    return None
+
+
+def step_running():
+    win = bpy.context.window
+    running = operators.RUN["running"]
+    drawn = operators.RUN["drawn"]
+    snap("estimating", running=running, drawn=drawn, statusbar=statusbar_rect(win))
+    result("running_at_shot", running)
+    bpy.app.timers.register(wait_estimate, first_interval=0.5)
+    return None
+
+
+def wait_estimate():
+    state["polls"] += 1
+    if operators.RUN["running"] and state["polls"] < 240:
+        return 0.5
+    result("outcome", json.dumps(operators.RUN["outcome"]))
+    result("drawn_during_run", operators.RUN["drawn"])
+    win, area, region = clip_area()
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        result("apply", bpy.ops.clip.sunlapse_apply_lamp())
+    bpy.app.timers.register(step_estimated, first_interval=1.0)
+    return None
+
+
+def step_estimated():
+    win, area, region = clip_area()
+    snap("estimated", clip_window=region_rect(area, "WINDOW"), sidebar=region_rect(area, "UI"),
+         statusbar=statusbar_rect(win),
+         apply=bpy.context.scene.sunlapse.last_apply)
+    # The sidebar scrolled down to Lamp and Render (the Apply result).
+    ui = next(r for r in area.regions if r.type == "UI")
+    for _ in range(12):
+        win.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=ui.x + ui.width // 2,
+                           y=ui.y + ui.height // 2)
+    bpy.app.timers.register(step_lamp_panel, first_interval=0.8)
+    return None
+
+
+def step_lamp_panel():
+    win, area, region = clip_area()
+    snap("lamp_and_render", sidebar=region_rect(area, "UI"))
+    with bpy.context.temp_override(window=win, area=area, region=region):
+        result("setup_ar", bpy.ops.clip.sunlapse_setup_ar())
+    # The AR preview: the same area as a 3D View through the camera.
+    area.type = "VIEW_3D"
+    space = area.spaces.active
+    space.show_region_ui = False
+    scene = bpy.context.scene
+    scene.cycles.preview_samples = 4  # a 2-core test machine
+    with bpy.context.temp_override(window=win, area=area,
+                                   region=next(r for r in area.regions if r.type == "WINDOW")):
+        from sunlapse import ar
+        ar.preview_in_viewports(bpy.context, scene.camera)
+        bpy.ops.view3d.view_center_camera()
+    bpy.app.timers.register(step_ar, first_interval=6.0)
+    return None
+
+
+def camera_frame_in_region(area):
+    """The camera's frame (film) corners in window pixels."""
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    region = next(r for r in area.regions if r.type == "WINDOW")
+    rv3d = area.spaces.active.region_3d
+    cam = bpy.context.scene.camera
+    corners = [cam.matrix_world @ v for v in cam.data.view_frame(scene=bpy.context.scene)]
+    pts = [location_3d_to_region_2d(region, rv3d, c) for c in corners]
+    xs = [p.x + region.x for p in pts if p is not None]
+    ys = [p.y + region.y for p in pts if p is not None]
+    return [min(xs), min(ys), max(xs), max(ys)]
+
+
+def step_ar():
+    win = bpy.context.window
+    area = next(a for a in win.screen.areas if a.type == "VIEW_3D")
+    space = area.spaces.active
+    sun = bpy.context.scene.sunlapse.sun_lamp
+    snap("ar_preview", camera_frame=camera_frame_in_region(area), shading=space.shading.type,
+         perspective=space.region_3d.view_perspective, clip=bpy.path.abspath(
+             bpy.context.scene.active_clip.filepath), frame=bpy.context.scene.frame_current,
+         sun_in_camera_frame=in_camera_view(sun))
+    with open(os.path.join(out, "steps.json"), "w") as fh:
+        json.dump(steps, fh, indent=1)
+    result("steps", len(steps))
+    bpy.ops.wm.quit_blender()
+    return None
+
+
+def in_camera_view(obj):
+    from bpy_extras.object_utils import world_to_camera_view
+    scene = bpy.context.scene
+    co = world_to_camera_view(scene, scene.camera, obj.matrix_world.translation)
+    return bool(0 <= co.x <= 1 and 0 <= co.y <= 1 and co.z > 0)
+
+
+if mode == "esc":
+    # A tiny clip is estimated in well under a second, before the Esc event
+    # is even handled: each progress call is slowed down so that the worker
+    # is still running when the cancel reaches it (as on a real clip).
+    import time
+    _run = operators.pipeline.run
+
+    def slow_run(*args, **kwargs):
+        progress = args[6] if len(args) > 6 else kwargs.get("progress")
+        if progress is not None:
+            def slowed(fraction):
+                time.sleep(0.3)
+                return progress(fraction)
+            args = args[:6] + (slowed,) + args[7:] if len(args) > 6 else args
+            kwargs = dict(kwargs, progress=slowed) if "progress" in kwargs else kwargs
+        return _run(*args, **kwargs)
+    operators.pipeline.run = slow_run
+
+if mode == "walkthrough":
+    os.makedirs(out, exist_ok=True)
+    bpy.app.timers.register(walkthrough, first_interval=2.0)
+else:
+    bpy.app.timers.register(start, first_interval=2.0)
+    bpy.app.timers.register(poll, first_interval=3.0)

@@ -1,0 +1,222 @@
+"""Light for AR inserts taken from the footage's own shadows. bpy-free.
+
+A shadow catcher darkens the plate by the ratio of the light a ground point
+gets with the insert to the light it gets without it; under a Sun lamp of
+irradiance S (per channel) and a uniform sky of radiance W, a horizontal
+ground point in the insert's shadow keeps pi W / (S cos z + pi W). The
+footage shows that same ratio in its real shadows: the median of the plate
+(linear, as Blender composites it) in the model's cast shadow over the median
+of the lit ground next to it. Solving for S and W per channel makes the
+insert's shadow as dark, and as tinted, as the real ones.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+# Assumed ground albedo: it sets only the overall exposure of the light (the
+# lit ground's plate value over it is the irradiance / pi); the shadow ratios
+# do not depend on it.
+GROUND_ALBEDO = 0.35
+# Shadow ratios are kept in this range: 1 would mean no Sun, 0 no sky.
+MIN_RATIO, MAX_RATIO = 0.02, 0.95
+# Fewest pixels on each side for a measurement.
+MIN_PIXELS = 6
+
+
+def srgb_to_linear(v: np.ndarray) -> np.ndarray:
+    """sRGB-encoded values in 0..1 to linear (what Blender's clip node gives)."""
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(v: np.ndarray) -> np.ndarray:
+    v = np.clip(np.asarray(v, dtype=np.float64), 0.0, None)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+def _shift_or(mask: np.ndarray, r: int) -> np.ndarray:
+    """Dilation by a (2r+1) square, by shifts (no OpenCV/scipy in the glue)."""
+    out = mask.copy()
+    h, w = mask.shape
+    for dy in range(-r, r + 1):
+        for dx in range(-r, r + 1):
+            if dy == 0 and dx == 0:
+                continue
+            ys, yd = (slice(0, h - dy), slice(dy, h)) if dy >= 0 else (slice(-dy, h), slice(0, h + dy))
+            xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
+            out[yd, xd] |= mask[ys, xs]
+    return out
+
+
+def dilate(mask: np.ndarray, r: int) -> np.ndarray:
+    return _shift_or(mask.astype(bool), r) if r > 0 else mask.astype(bool)
+
+
+def erode(mask: np.ndarray, r: int) -> np.ndarray:
+    return ~_shift_or(~mask.astype(bool), r) if r > 0 else mask.astype(bool)
+
+
+@dataclass
+class ShadowBalance:
+    shadow_ratio: Tuple[float, float, float]   # shadow / lit, linear R, G, B
+    lit_linear: Tuple[float, float, float]     # lit ground's median, linear R, G, B
+    shadow_pixels: int
+    lit_pixels: int
+    shadow_mask: Optional[np.ndarray] = None   # the pixels measured, H x W bool
+    lit_mask: Optional[np.ndarray] = None
+
+
+def measure_shadow_balance(rgb_linear: np.ndarray, ground: np.ndarray, shadow: np.ndarray,
+                           band_px: Optional[int] = None) -> Optional[ShadowBalance]:
+    """Per-channel shadow/lit ratio of the real shadows on one frame.
+
+    rgb_linear: H x W x 3 linear plate; ground, shadow: H x W masks (the
+    model's ground, and its cast shadow toward the estimated Sun). The edges
+    (a pixel's worth, more on large frames) are left out: a Sun a little off
+    moves them. Lit pixels are taken within `band_px` of the shadows, so the
+    same kind of ground is compared. None when either side is too small."""
+    h, w = ground.shape
+    ground = ground.astype(bool)
+    shadow = shadow.astype(bool) & ground
+    margin = max(1, round(w / 400))
+    band = band_px if band_px is not None else max(4, round(w / 25))
+    # Wide shadows first: thin ones (a fence's bars, a pole's) are mostly
+    # edge pixels, part lit, at small sizes.
+    for m in (3 * margin, 2 * margin, margin):
+        core = erode(shadow, m) & erode(ground, margin)
+        if core.sum() >= 4 * MIN_PIXELS:
+            break
+    near = dilate(shadow, band) & ~dilate(shadow, margin + 1) & erode(ground, margin)
+    if core.sum() < MIN_PIXELS or near.sum() < MIN_PIXELS:
+        return None
+    # A Sun a little off, or a shadow the model does not cast, puts lit
+    # pixels among the predicted shadow and dark ones beside it: each side
+    # keeps only the pixels on its side of the threshold halfway (in log)
+    # between the two first medians.
+    lum_all = rgb_linear.mean(axis=2)
+    for _ in range(2):
+        d, l = np.median(lum_all[core]), np.median(lum_all[near])
+        if not (0 < d < l):
+            break
+        t = math.sqrt(d * l)
+        core2, near2 = core & (lum_all < t), near & (lum_all >= t)
+        if core2.sum() < MIN_PIXELS or near2.sum() < MIN_PIXELS:
+            break
+        core, near = core2, near2
+    dark = np.median(rgb_linear[core], axis=0)
+    lit = np.median(rgb_linear[near], axis=0)
+    if np.any(lit <= 1e-6):
+        return None
+    ratio = np.clip(dark / lit, MIN_RATIO, MAX_RATIO)
+    return ShadowBalance(tuple(float(x) for x in ratio), tuple(float(x) for x in lit),
+                         int(core.sum()), int(near.sum()), core, near)
+
+
+def sun_and_sky(shadow_ratio: Sequence[float], lit_linear: Sequence[float], zenith_deg: float,
+                ground_albedo: float = GROUND_ALBEDO, sky_seen_in_shadow=1.0,
+                sky_seen_lit: float = 1.0):
+    """(Sun irradiance RGB, sky radiance RGB) that reproduce the footage's
+    `shadow_ratio` on horizontal ground and light it as bright as the
+    plate's lit ground (for an albedo of `ground_albedo`).
+
+    The real shadows lie beside their casters, which hide part of the sky
+    from them (`sky_seen_in_shadow`, cosine-weighted, 0..1, one value or one
+    per channel; the lit ground beside them sees `sky_seen_lit`); an insert
+    hides the sky from its own shadow the same way when rendered, so that
+    share is taken out here:
+        ratio = Vs x / (1 + Vl x),  x = pi W / (S cos z)
+        S cos z + Vl pi W = pi lit / albedo."""
+    cos_z = max(0.05, math.cos(math.radians(zenith_deg)))  # grazing Sun: bounded
+    seen = sky_seen_in_shadow if isinstance(sky_seen_in_shadow, (tuple, list, np.ndarray)) \
+        else (sky_seen_in_shadow,) * len(shadow_ratio)
+    sun, sky = [], []
+    for r, lit, vs in zip(shadow_ratio, lit_linear, seen):
+        vs = min(1.0, max(0.2, float(vs)))
+        vl = min(1.0, max(vs, sky_seen_lit))
+        r = min(MAX_RATIO * vs / vl, max(MIN_RATIO, r))
+        x = r / max(1e-6, vs - r * vl)
+        irradiance = math.pi * lit / ground_albedo
+        direct = irradiance / (1.0 + vl * x)           # S cos z
+        sun.append(direct / cos_z)
+        sky.append(x * direct / math.pi)               # W
+    return tuple(sun), tuple(sky)
+
+
+def effective_sky_seen(rendered_ratio: Sequence[float], target_ratio: Sequence[float],
+                       sky_seen_in_shadow: float, sky_seen_lit: float):
+    """Per channel, the shadows' sky visibility that explains the ratio a
+    render gave (`rendered_ratio`, lit as sun_and_sky set it for
+    `target_ratio`): everything the formula leaves out (specular, bounced
+    light, the ground's bumps) folded into it. Feeding it back to
+    sun_and_sky makes the render give the target."""
+    out = []
+    for got, want in zip(rendered_ratio, target_ratio):
+        vs = min(1.0, max(0.2, sky_seen_in_shadow))
+        vl = min(1.0, max(vs, sky_seen_lit))
+        want = min(MAX_RATIO * vs / vl, max(MIN_RATIO, want))
+        x = want / max(1e-6, vs - want * vl)
+        out.append(min(1.0, max(0.2, got * (1.0 + vl * x) / x)))
+    return tuple(out)
+
+
+def sun_to_sky(shadow_ratio: Sequence[float], zenith_deg: float, sky_seen_in_shadow: float = 1.0,
+               sky_seen_lit: float = 1.0):
+    """The Sun's irradiance over the unoccluded sky's (S / pi W, per
+    channel) behind a measured shadow ratio (see sun_and_sky): unlike the
+    ratio it does not change with the Sun's height, so frames pool it."""
+    cos_z = max(0.05, math.cos(math.radians(zenith_deg)))
+    vs = min(1.0, max(0.2, sky_seen_in_shadow))
+    vl = min(1.0, max(vs, sky_seen_lit))
+    out = []
+    for r in shadow_ratio:
+        r = min(MAX_RATIO * vs / vl, max(MIN_RATIO, r))
+        out.append(max(1e-6, vs - r * vl) / r / cos_z)
+    return tuple(out)
+
+
+def ratio_for(sun_to_sky_rgb: Sequence[float], zenith_deg: float, sky_seen_in_shadow: float = 1.0,
+              sky_seen_lit: float = 1.0):
+    """The shadow ratio a Sun-to-sky balance gives at `zenith_deg`."""
+    cos_z = max(0.05, math.cos(math.radians(zenith_deg)))
+    out = []
+    for k in sun_to_sky_rgb:
+        x = 1.0 / (k * cos_z)
+        out.append(sky_seen_in_shadow * x / (1.0 + sky_seen_lit * x))
+    return tuple(out)
+
+
+def cosine_directions(n: int = 64) -> np.ndarray:
+    """n unit directions over the upper hemisphere, spread evenly in the
+    cosine-weighted measure (a Fibonacci spiral): the fraction not blocked
+    is the share of a uniform sky's light a horizontal point gets."""
+    k = np.arange(n) + 0.5
+    r = np.sqrt(k / n)                      # disc radius, uniform in area
+    phi = k * math.pi * (3.0 - math.sqrt(5.0))
+    z = np.sqrt(np.maximum(0.0, 1.0 - r * r))
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1).astype(np.float32)
+
+
+def sky_seen(origins: np.ndarray, occluded, n: int = 64, max_points: int = 1500,
+             seed: int = 0) -> float:
+    """Mean cosine-weighted sky visibility of `origins` (M x 3, lifted off
+    the ground); `occluded(origins, directions) -> bool array` casts rays."""
+    if len(origins) == 0:
+        return 1.0
+    if len(origins) > max_points:
+        pick = np.random.default_rng(seed).choice(len(origins), max_points, replace=False)
+        origins = origins[pick]
+    dirs = cosine_directions(n)
+    o = np.ascontiguousarray(np.repeat(origins.astype(np.float32), n, axis=0))
+    d = np.ascontiguousarray(np.tile(dirs, (len(origins), 1)))
+    return float(1.0 - np.mean(occluded(o, d)))
+
+
+def as_strength_and_color(rgb: Sequence[float]):
+    """(strength, colour with max channel 1) for a lamp or a background."""
+    peak = max(max(rgb), 1e-9)
+    return peak, tuple(c / peak for c in rgb)
