@@ -237,7 +237,8 @@ def summary(rows):
 
 
 def print_summary(s, smoothing):
-    within = "-" if s["confident_within_2deg"] is None else f"{100 * s['confident_within_2deg']:.1f}%"
+    share = s["confident_within_2deg"]
+    within = "-" if share is None else f"{100 * share:.1f}%"
     print(f"summary ({smoothing}): {s['passed']}/{s['scenes']} scenes pass "
           f"({100 * s['pass_rate']:.0f}%; target >= 95%); frames estimated "
           f"{s['frames_estimated']}/{s['frames']}; confidence >= {CONFIDENT}: "

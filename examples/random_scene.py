@@ -300,7 +300,8 @@ def _draw_outdoor(rng, sun_position, frames, resolution):
     shapes = [rng.choice(CASTER_SHAPES) for _ in range(want)]
     for k, shape in enumerate(shapes):
         item = dict(shape=shape, name=f"{shape.capitalize()}{k + 1}",
-                    rotation_z_deg=round(rng.uniform(0.0, 180.0), 2), **_draw_caster(rng, shape, thin))
+                    rotation_z_deg=round(rng.uniform(0.0, 180.0), 2),
+                    **_draw_caster(rng, shape, thin))
         full_height = item["size"][2]
         for scale in (1.0, 0.75, 0.55, 0.4):
             # Too long a shadow for this view: a lower caster.
@@ -385,7 +386,6 @@ def _draw_room(rng, sun_position, frames, resolution):
         for z, a in suns:
             if abs((a + north - facing + 180) % 360 - 180) > 60:
                 return False
-            s = sun_in_world(z, a + north)
             v_dist = (sill + top) / 2 * math.tan(math.radians(z)) * abs(
                 math.cos(math.radians(a + north - facing)))
             if not 0.4 < v_dist < d - 0.6:

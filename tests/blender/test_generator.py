@@ -122,7 +122,8 @@ def test_random_specs_are_deterministic_and_keep_their_shadows_in_view(native):
         else:
             assert 2 <= len(a["casters"]) <= 5
             assert all(random_scene.casters_in_view(a, native.sun_position)), key
-    assert random_scene.draw("1", native.sun_position) != random_scene.draw("2", native.sun_position)
+    one, two = (random_scene.draw(k, native.sun_position) for k in ("1", "2"))
+    assert one != two
     with pytest.raises(ValueError, match="integer seed"):
         random_scene.draw("plaza", native.sun_position)
 
