@@ -222,7 +222,8 @@ def physical_inputs(args, context, options):
     """Place and time for physical smoothing: the flags first, then what the
     panel gave (`options`, filled by prepare_run), then Blender's Sun Position
     add-on (its latitude, longitude, date, time and UTC zone). With the
-    frames' times known (a times file) only the place is needed."""
+    frames' times known (a times file) only the place is needed; with no
+    place at all, the Sun's circle about the pole is fitted instead."""
     import datetime as dt
     from .core import frametimes
     sp = getattr(context.scene, "sun_pos_properties", None)
@@ -235,6 +236,14 @@ def physical_inputs(args, context, options):
         return getattr(sp, from_sun_position, None)
     lat = pick(args.latitude, options.latitude_deg, "latitude")
     lon = pick(args.longitude, options.longitude_deg, "longitude")
+    if lat is None and lon is None:
+        # No place anywhere: the Sun's circle about the pole is fitted
+        # instead (core.suncircle), in real time when the seconds per frame
+        # are known, else per frame.
+        seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds
+        if seconds is not None and not (math.isfinite(seconds) and seconds > 0):
+            fail(EXIT_USAGE, f"--frame-seconds {seconds} is not a positive number of seconds")
+        return {"frame_seconds": seconds}
     if options.frame_times is not None:
         missing = [n for n, v in (("--latitude", lat), ("--longitude", lon)) if v is None]
         if missing:

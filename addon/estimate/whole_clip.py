@@ -40,6 +40,10 @@ REFINE_MAX_DEG = 8.0
 # see sun_path.h; the frame's own evidence and its neighbours'): full at this
 # lead.
 FULL_CONFIDENCE_MARGIN = 12.0
+# The Sun's apparent motion bound (deg per hour), and per frame when the
+# frames' times are unknown (sun_path.h's generous bound).
+SUN_DEG_PER_HOUR = 15.5
+UNTIMED_STEP_DEG = 12.0
 # Confidence of frames without sky evidence of their own: carried by the
 # path alone; followed by the tracker between frames with evidence (its
 # sub-pixel fit sees thin shadows the sky's samples miss); followed past the
@@ -159,7 +163,13 @@ def estimate(native, scene, camera, frames: Sequence[int],
         for k in range(1, n):
             if times_s[k] < times_s[k - 1]:
                 starts[k] = 1
-    path = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts)
+    path_options = native.SunPathOptions()
+    if times_s is not None:
+        # Known times say where the clip is continuous: the Sun cannot jump
+        # between frames minutes apart (time jumps are the segments above).
+        path_options.jump_cost = -1.0
+    path = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
+                                 path_options)
     if not path["success"]:
         result.frames = [RawFrame(f, reason=path["message"] or reasons[k] or "no evidence")
                          for k, f in enumerate(frames)]
@@ -187,68 +197,92 @@ def estimate(native, scene, camera, frames: Sequence[int],
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None
 
-    # Pass 2: refine each segment from its first measured frame on.
+    # Pass 2: refine each segment with the shadow tracker, forward from its
+    # first measured frame, then back from it to the frames before.
     tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
                                    ignore_top_rows=ignore_top_rows)
     raws: List[RawFrame] = []
-    track_seconds = 0.0
+    clock = {"tracking": 0.0, "done": 0}
+
+    def motion_deg(k, j):
+        """How far the Sun can move between frames k and j (deg)."""
+        if times_s is not None:
+            return abs(times_s[k] - times_s[j]) / 3600.0 * SUN_DEG_PER_HOUR
+        return abs(k - j) * UNTIMED_STEP_DEG
+
+    def refine(k, raw, follow, beyond, anchor):
+        """Refines frame k into `raw`; returns whether the tracker holds.
+        Beyond the measured frames the path has no evidence of its own: the
+        result is checked against the nearest measured frame's Sun, as far
+        as the Sun can move from it."""
+        clock["done"] += 1
+        tick(0.5 + 0.5 * clock["done"] / n)
+        d = directions[path["direction"][anchor if beyond else k]]
+        limit = REFINE_MAX_DEG + (motion_deg(k, anchor) if beyond else 0.0)
+        gray = _frame(read_gray(frames[k]))
+        refined = None
+        if gray is not None:
+            # The tracker's own prediction (the last refined Suns' motion) is
+            # finer than the path's grid cell; the path's direction is the
+            # check, and the fallback when the tracker has drifted.
+            for attempt in ("own", "path") if follow else ("path",):
+                r = tracker.track(gray) if attempt == "own" else tracker.track_toward(gray, d)
+                clock["tracking"] += r.seconds
+                if r.ok and _angle_deg(r.sun_in_world, d) <= limit:
+                    refined = r
+                    break
+        support = max(0.0, min(1.0, path["path_margin"][k] / FULL_CONFIDENCE_MARGIN))
+        if refined is not None:
+            raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg
+            raw.refined, raw.tracked, raw.reason = True, refined, None
+            if measured[k]:
+                raw.confidence = refined.confidence * support
+            else:
+                raw.confidence = refined.confidence * (
+                    FOLLOWED_BEYOND_CONFIDENCE if beyond else FOLLOWED_CONFIDENCE)
+        elif beyond:
+            raw.reason = "shadow lost beyond the frames with shadow evidence"
+        else:
+            raw.zenith_deg, raw.azimuth_world_deg = angles_of(d)
+            raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE
+        return refined is not None
+
     for s in range(len(bounds) - 1):
         lo, hi = bounds[s], bounds[s + 1]
         result.segments.append(frames[lo:hi])
+        seg = [RawFrame(frames[k], segment=s, measured=bool(measured[k])) for k in range(lo, hi)]
+        raws.extend(seg)
+        usable = [status[k] in (ok, native.FrameEvidenceStatus.NO_SHADOWS) for k in range(lo, hi)]
+        for k in range(lo, hi):
+            if not usable[k - lo]:
+                seg[k - lo].reason = reasons[k] or "no evidence on this frame"
+            else:
+                seg[k - lo].reason = "no shadow evidence on this frame or around it in its segment"
         first = next((k for k in range(lo, hi) if measured[k]), None)
         last = next((k for k in range(hi - 1, lo - 1, -1) if measured[k]), None)
-        initialized = follow = False
-        for k in range(lo, hi):
-            tick(0.5 + 0.5 * k / n)
-            f = frames[k]
-            raw = RawFrame(f, segment=s, measured=bool(measured[k]))
-            raws.append(raw)
-            if status[k] != ok and status[k] != native.FrameEvidenceStatus.NO_SHADOWS:
-                raw.reason = reasons[k] or "no evidence on this frame"
-                continue
-            beyond = first is None or last is None or not first <= k <= last
-            if beyond and not follow:
-                # Before or after the segment's measured frames, with no
-                # tracked shadow to follow: nothing to carry.
-                raw.reason = "no shadow evidence on this frame or around it in its segment"
-                continue
-            d = directions[path["direction"][k]]
-            gray = _frame(read_gray(f)) if (measured[k] or initialized) else None
-            refined = None
-            if gray is not None and measured[k] and not initialized:
-                init = tracker.initialize(gray, d)
-                initialized = init.ok
-            if gray is not None and initialized:
-                # The tracker's own prediction (the last refined Suns' motion)
-                # is finer than the path's grid cell; the path's direction is
-                # the check, and the fallback when the tracker has drifted.
-                for attempt in ("own", "path") if follow else ("path",):
-                    r = tracker.track(gray) if attempt == "own" else tracker.track_toward(gray, d)
-                    track_seconds += r.seconds
-                    if r.ok and _angle_deg(r.sun_in_world, d) <= REFINE_MAX_DEG:
-                        refined = r
-                        break
-            follow = refined is not None
-            support = max(0.0, min(1.0, path["path_margin"][k] / FULL_CONFIDENCE_MARGIN))
-            if beyond and refined is None:
-                raw.reason = "shadow lost after the last frame with shadow evidence"
-                continue
-            if refined is not None:
-                raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg
-                raw.refined, raw.tracked = True, refined
-                if measured[k]:
-                    raw.confidence = refined.confidence * support
-                else:
-                    raw.confidence = refined.confidence * (
-                        FOLLOWED_BEYOND_CONFIDENCE if beyond else FOLLOWED_CONFIDENCE)
-            else:
-                raw.zenith_deg, raw.azimuth_world_deg = angles_of(d)
-                raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE
+        if first is None or last is None:
+            continue
+        for order in (range(first, hi), range(first, lo - 1, -1)):
+            gray = _frame(read_gray(frames[first]))
+            if gray is None or not tracker.initialize(
+                    gray, directions[path["direction"][first]]).ok:
+                break
+            # Backward, the tracker holds from the first measured frame on.
+            follow = order.step < 0
+            for k in order:
+                if k == first and order.step < 0:
+                    continue  # refined on the way forward
+                if not usable[k - lo]:
+                    continue
+                beyond = not first <= k <= last
+                if beyond and not follow:
+                    continue  # lost past the evidence: nothing to carry
+                follow = refine(k, seg[k - lo], follow, beyond, last if k > last else first)
     result.frames = raws
     t_end = time.perf_counter() - t0
     result.timing = {"table_s": t_table, "reference_s": t_setup - t_table,
                      "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
-                     "tracking_ms_per_frame": 1000.0 * track_seconds / max(1, n),
+                     "tracking_ms_per_frame": 1000.0 * clock["tracking"] / max(1, n),
                      "total_s": t_end, "samples": sky.num_samples,
                      "directions": len(directions), "spacing_deg": spacing}
     return result
