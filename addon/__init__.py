@@ -22,7 +22,7 @@ if "bpy" in locals():  # script reload (F3 › Reload Scripts)
 
 import bpy  # noqa: E402
 
-from . import native_loader, operators, overlay, panels, properties  # noqa: E402
+from . import native_loader, operators, overlay, panels, properties  # noqa: E402, F401
 
 _modules = (properties, operators, panels, overlay)
 _cli_handle = None

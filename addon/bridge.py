@@ -154,8 +154,8 @@ def gather_model(context, collection: Optional[bpy.types.Collection] = None,
 def guess_ground(model: Model, camera=None) -> List[str]:
     """The ground the shadows fall on (overridable by the user): the lowest
     large horizontal surface, below the camera when it is given (a
-    CameraInfo, or its position in the world frame), since a camera sees a surface's upper face only from
-    above.
+    CameraInfo, or its position in the world frame), since a camera sees a
+    surface's upper face only from above.
 
     Horizontal means the triangle's normal is within 18 deg of vertical,
     whichever way it is wound: a thin slab's two faces count once each, so
@@ -231,7 +231,8 @@ def gather_camera(context, camera_obj=None, clip: Optional[ClipInfo] = None,
     width, height = rw, rh
     if clip is not None:
         render_aspect = rw * scene.render.pixel_aspect_x / (rh * scene.render.pixel_aspect_y)
-        clip_aspect = clip.width * scene.render.pixel_aspect_x / (clip.height * scene.render.pixel_aspect_y)
+        clip_aspect = (clip.width * scene.render.pixel_aspect_x
+                       / (clip.height * scene.render.pixel_aspect_y))
         if abs(render_aspect / clip_aspect - 1.0) > 0.01:
             raise SceneError(
                 f"Render resolution {rw}x{rh} does not have the clip's aspect "

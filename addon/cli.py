@@ -47,8 +47,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def parse_args(argv):
-    p = _Parser(prog=PROG,
-                                description="Estimate the Sun on a clip.")
+    p = _Parser(prog=PROG, description="Estimate the Sun on a clip.")
     p.add_argument("--out", required=True, help="track file to write (*.sun.json)")
     p.add_argument("--collection", help="collection holding the model")
     p.add_argument("--ground", nargs="+", default=[], help="ground object name(s)")
@@ -416,8 +415,8 @@ def _run(argv, interrupt):
         interrupt.check()  # "cancelled" by Ctrl-C
         fail(EXIT_SCENE, str(e))
     interrupt.check()
-    summary = operators.finish_run(context, track, clip, dict(extra, method=args.method,
-                                                               frames=list(frames)))
+    summary = operators.finish_run(context, track, clip,
+                                   dict(extra, method=args.method, frames=list(frames)))
     if operators.report_level(track) == {"WARNING"}:
         print(f"sunlapse: warning: {summary}")
     init = track.initial
@@ -498,7 +497,8 @@ def command(argv):
     """Blender 4.2+ command: blender -c sunlapse SCENE.blend --out TRACK.json ..."""
     import bpy
     if not argv or argv[0].startswith("-"):
-        sys.stderr.write("sunlapse: error: usage: blender -c sunlapse SCENE.blend --out TRACK.json ...\n")
+        sys.stderr.write("sunlapse: error: usage: "
+                         "blender -c sunlapse SCENE.blend --out TRACK.json ...\n")
         return EXIT_USAGE
     try:
         bpy.ops.wm.open_mainfile(filepath=os.path.abspath(argv[0]))

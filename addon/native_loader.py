@@ -69,7 +69,8 @@ def _elf_needed(path):
         return None
     shoff, = struct.unpack_from("<Q", data, 0x28)
     shentsize, shnum = struct.unpack_from("<HH", data, 0x3A)
-    sections = [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize) for i in range(shnum)]
+    sections = [struct.unpack_from("<IIQQQQIIQQ", data, shoff + i * shentsize)
+                for i in range(shnum)]
     needed, paths = [], []
     for name, kind, _, _, offset, size, link, _, _, entsize in sections:
         if kind != 6:  # SHT_DYNAMIC
@@ -104,8 +105,8 @@ def missing_libraries(module_path, limit=200):
             if lib in seen:
                 continue
             seen.add(lib)
-            local = next((os.path.join(d, lib) for d in dirs if os.path.exists(os.path.join(d, lib))),
-                         None)
+            local = next((os.path.join(d, lib) for d in dirs
+                          if os.path.exists(os.path.join(d, lib))), None)
             if local:
                 todo.append(local)
                 continue

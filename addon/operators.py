@@ -1,7 +1,6 @@
 """Operators. They call bridge/core and _native; errors go to self.report."""
 
 import datetime as dt
-import os
 import threading
 import time
 
@@ -247,7 +246,8 @@ def physical_from_settings(context, settings, options):
     elif sp is not None:
         day = dt.date(sp.year, sp.month, sp.day)
         lat, lon, hours = sp.latitude, sp.longitude, sp.time
-        tz = exif.zone("", sp.UTC_zone + (1.0 if getattr(sp, "use_daylight_savings", False) else 0.0))
+        dst = 1.0 if getattr(sp, "use_daylight_savings", False) else 0.0
+        tz = exif.zone("", sp.UTC_zone + dst)
     options.fit_latitude = settings.fit_latitude
     if options.frame_times is not None:  # the times file is the clock
         options.latitude_deg, options.longitude_deg = lat, lon
@@ -316,7 +316,8 @@ def draw_status_progress(self, context):
     row = self.layout.row(align=True)
     text = "Cancelling the Sun estimate" if RUN["cancel"] else "Estimating the Sun"
     if hasattr(row, "progress"):
-        row.progress(factor=RUN["fraction"], type="BAR", text=f"{text} {100 * RUN['fraction']:.0f}%")
+        row.progress(factor=RUN["fraction"], type="BAR",
+                     text=f"{text} {100 * RUN['fraction']:.0f}%")
     else:
         filled = int(round(20 * RUN["fraction"]))
         row.label(text=f"{text}  {'█' * filled}{'░' * (20 - filled)}  {100 * RUN['fraction']:.0f}%",
@@ -371,7 +372,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         scene_n, camera_n, clip, frames, options, extra = self._job
         RUN.update(running=True, fraction=0.0, cancel=False, thread=None)
         try:
-            track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames, options)
+            track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames,
+                                 options)
         except (pipeline.PipelineError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -437,7 +439,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         if self._thread.is_alive():
             return {"PASS_THROUGH"}
         self._end(context)
-        stopped = isinstance(self._error, pipeline.PipelineError) and str(self._error) == "cancelled"
+        stopped = (isinstance(self._error, pipeline.PipelineError)
+                   and str(self._error) == "cancelled")
         if self._error is not None and not stopped:
             RUN["outcome"] = f"failed: {type(self._error).__name__}: {self._error}"
             self.report({"ERROR"}, f"Estimate failed: {self._error}")
@@ -638,7 +641,8 @@ class CLIP_OT_sunlapse_to_sun_position(bpy.types.Operator):
             sp.use_daylight_savings = False  # the zone's offset already includes it
             sp.UTC_zone = exif.utc_offset_hours(tz, when)
             sp.year, sp.month, sp.day = local.year, local.month, local.day
-            sp.time = local.hour + local.minute / 60 + (local.second + local.microsecond * 1e-6) / 3600
+            sp.time = (local.hour + local.minute / 60
+                       + (local.second + local.microsecond * 1e-6) / 3600)
             written.append(f"{local:%Y-%m-%d %H:%M:%S} UTC{sp.UTC_zone:+g}")
         self.report({"INFO"}, f"Sun Position: {', '.join(written)} (lat {lat:.4f}, lon {lon:.4f})"
                     + ("" if when is not None else "; no time known for this frame (Frame "
@@ -690,7 +694,6 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         description="Known focal length (with a 36 mm sensor); 0: estimate it")
 
     def execute(self, context):
-        import math
         scene = context.scene
         clip = bridge.active_movieclip(context)
         if clip is None:
@@ -711,7 +714,8 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         if not r["success"]:
-            extra = f" (tracks without coordinates in their names: {', '.join(skipped)})" if skipped else ""
+            extra = (f" (tracks without coordinates in their names: {', '.join(skipped)})"
+                     if skipped else "")
             self.report({"ERROR"}, r["message"] + extra)
             return {"CANCELLED"}
         cam_obj = scene.sunlapse.camera or scene.camera
@@ -743,9 +747,10 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene, CLIP_OT_sunlapse_initial_sun,
-           CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_cancel, CLIP_OT_sunlapse_apply_lamp,
-           CLIP_OT_sunlapse_export, CLIP_OT_sunlapse_setup_ar, CLIP_OT_sunlapse_to_sun_position)
+classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene,
+           CLIP_OT_sunlapse_initial_sun, CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_cancel,
+           CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export, CLIP_OT_sunlapse_setup_ar,
+           CLIP_OT_sunlapse_to_sun_position)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 

@@ -111,13 +111,13 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
     shader.bind()
     shader.uniform_float("color", PLOT_BACK)
     batch_for_shader(shader, "TRIS", {"pos": [(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by0),
-                                             (bx1, by1), (bx0, by1)]}).draw(shader)
+                                              (bx1, by1), (bx0, by1)]}).draw(shader)
     size = int(11 * scale)
     blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
     for title, color, (lo, hi), pts, sy, sh in plot["strips"]:
         shader.uniform_float("color", (1, 1, 1, 0.25))
         batch_for_shader(shader, "LINES", {"pos": [(x0, sy), (x0 + w, sy), (x0, sy + sh),
-                                                  (x0 + w, sy + sh), (x0, sy), (x0, sy + sh)]}
+                                                   (x0 + w, sy + sh), (x0, sy), (x0, sy + sh)]}
                          ).draw(shader)
         shader.uniform_float("color", color)
         batch_for_shader(shader, "LINE_STRIP", {"pos": pts}).draw(shader)

@@ -160,7 +160,8 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
             # Cycles 3.x draws the sun at geographical_to_direction(elevation,
             # rotation + 90 deg): rotation = -(world azimuth).
             node.sun_elevation = math.radians(90.0 - f.zenith_deg)
-            node.sun_rotation = math.radians(-(f.azimuth_deg + track.north_offset_deg)) % (2 * math.pi)
+            node.sun_rotation = (math.radians(-(f.azimuth_deg + track.north_offset_deg))
+                                 % (2 * math.pi))
             node.keyframe_insert("sun_elevation", frame=f.frame)
             node.keyframe_insert("sun_rotation", frame=f.frame)
         world[KEYED_FRAMES_PROP] = [f.frame for f in frames]

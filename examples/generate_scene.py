@@ -251,6 +251,7 @@ def place_room_walls(model, wall_mat, sun_azimuth_world_deg):
     walls = []
     # Window wall (toward local +Y, turned to face the Sun): four pieces
     # around a 2 m x 1.4 m opening whose sill is 0.6 m high.
+
     def put(name, size, loc):
         ob = _box(name, size, loc, 0, model, wall_mat)
         walls.append(ob)
@@ -258,7 +259,7 @@ def place_room_walls(model, wall_mat, sun_azimuth_world_deg):
     put("WallWin_L", (2.0, t, h), (-2.0, d / 2, 0))
     put("WallWin_R", (2.0, t, h), (2.0, d / 2, 0))
     put("WallWin_Low", (2.0, t, 0.6), (0.0, d / 2, 0))
-    top = put("WallWin_Top", (2.0, t, 1.0), (0.0, d / 2, 2.0))
+    put("WallWin_Top", (2.0, t, 1.0), (0.0, d / 2, 2.0))
     put("WallBack", (w, t, h), (0, -d / 2, 0))
     put("WallSideA", (t, d, h), (-w / 2, 0, 0))
     put("WallSideB", (t, d, h), (w / 2, 0, 0))
@@ -326,7 +327,8 @@ def setup_camera(scene, cam_cfg, layout, width, height, sun_azimuth_world_deg):
 def local_times(preset, count):
     y, m, d = preset["date"]
     hh, mm = preset["start"]
-    start = dt.datetime(y, m, d, hh, mm, tzinfo=dt.timezone(dt.timedelta(hours=preset["utc_offset_h"])))
+    tz = dt.timezone(dt.timedelta(hours=preset["utc_offset_h"]))
+    start = dt.datetime(y, m, d, hh, mm, tzinfo=tz)
     step = dt.timedelta(minutes=preset["minutes_per_frame"])
     return [start + i * step for i in range(count)]
 
@@ -489,7 +491,7 @@ def main(argv):
     ground = build_layout(preset["layout"], model, extras, ground_mat)
     if preset["layout"] == "room":
         place_room_walls(model, bpy.data.materials["concrete"], mid_az_world)
-    cam_obj = setup_camera(scene, preset["camera"], preset["layout"], width, height, mid_az_world)
+    setup_camera(scene, preset["camera"], preset["layout"], width, height, mid_az_world)
 
     lamp = add_sun_and_sky(scene, suns, north)
     configure_render(scene, samples, preset.get("exposure", 0.0), frames, frames_dir)
@@ -526,6 +528,7 @@ def main(argv):
 
 # ---------------------------------------------------------------------------
 # Random scenes (the scene suite): examples/random_scene.py draws, this builds.
+
 
 def _link_only(ob, collection):
     for c in ob.users_collection:

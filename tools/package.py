@@ -76,7 +76,8 @@ def ldd(path):
 def python_tag(module):
     m = re.search(r"\.cpython-(\d+)-x86_64-linux-gnu\.so$", module)
     if not m:
-        raise PackageError(f"{module}: not a CPython x86-64 Linux module (_native.cpython-3XX-...so)")
+        raise PackageError(f"{module}: not a CPython x86-64 Linux module "
+                           "(_native.cpython-3XX-...so)")
     return "cp" + m.group(1)
 
 
@@ -186,8 +187,10 @@ def wheel(package_dir, out_dir, version, tags):
             rel = os.path.relpath(path, os.path.dirname(package_dir)).replace(os.sep, "/")
             with open(path, "rb") as fh:
                 files[rel] = fh.read()
-    files[f"{info}/METADATA"] = (f"Metadata-Version: 2.1\nName: sunlapse-native\nVersion: {version}\n"
-                                 "Summary: The compiled core of the sunlapse Blender add-on\n").encode()
+    files[f"{info}/METADATA"] = (f"Metadata-Version: 2.1\nName: sunlapse-native\n"
+                                 f"Version: {version}\n"
+                                 "Summary: The compiled core of the sunlapse Blender add-on\n"
+                                 ).encode()
     files[f"{info}/WHEEL"] = ("Wheel-Version: 1.0\nGenerator: sunlapse tools/package.py\n"
                               "Root-Is-Purelib: false\n"
                               + "".join(f"Tag: {t}-{t}-{plat}\n" for t in tags)).encode()

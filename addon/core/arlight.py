@@ -47,8 +47,10 @@ def _shift_or(mask: np.ndarray, r: int) -> np.ndarray:
         for dx in range(-r, r + 1):
             if dy == 0 and dx == 0:
                 continue
-            ys, yd = (slice(0, h - dy), slice(dy, h)) if dy >= 0 else (slice(-dy, h), slice(0, h + dy))
-            xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
+            ys, yd = ((slice(0, h - dy), slice(dy, h)) if dy >= 0
+                      else (slice(-dy, h), slice(0, h + dy)))
+            xs, xd = ((slice(0, w - dx), slice(dx, w)) if dx >= 0
+                      else (slice(-dx, w), slice(0, w + dx)))
             out[yd, xd] |= mask[ys, xs]
     return out
 
@@ -100,10 +102,10 @@ def measure_shadow_balance(rgb_linear: np.ndarray, ground: np.ndarray, shadow: n
     # between the two first medians.
     lum_all = rgb_linear.mean(axis=2)
     for _ in range(2):
-        d, l = np.median(lum_all[core]), np.median(lum_all[near])
-        if not (0 < d < l):
+        d, lt = np.median(lum_all[core]), np.median(lum_all[near])
+        if not (0 < d < lt):
             break
-        t = math.sqrt(d * l)
+        t = math.sqrt(d * lt)
         core2, near2 = core & (lum_all < t), near & (lum_all >= t)
         if core2.sum() < MIN_PIXELS or near2.sum() < MIN_PIXELS:
             break
@@ -113,8 +115,13 @@ def measure_shadow_balance(rgb_linear: np.ndarray, ground: np.ndarray, shadow: n
     if np.any(lit <= 1e-6):
         return None
     ratio = np.clip(dark / lit, MIN_RATIO, MAX_RATIO)
-    return ShadowBalance(tuple(float(x) for x in ratio), tuple(float(x) for x in lit),
-                         int(core.sum()), int(near.sum()), core, near)
+    return ShadowBalance(_rgb(ratio), _rgb(lit), int(core.sum()), int(near.sum()), core, near)
+
+
+def _rgb(v: np.ndarray) -> Tuple[float, float, float]:
+    """A per-channel (R, G, B) array as a tuple of three floats."""
+    r, g, b = (float(x) for x in v)
+    return r, g, b
 
 
 def sun_and_sky(shadow_ratio: Sequence[float], lit_linear: Sequence[float], zenith_deg: float,

@@ -14,7 +14,7 @@ import datetime as dt
 import os
 import re
 from dataclasses import dataclass
-from typing import List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence
 
 EXIF_IFD = 0x8769
 GPS_IFD = 0x8825
@@ -57,7 +57,10 @@ def zone(name: str = "", utc_offset_hours: float = 0.0) -> dt.tzinfo:
 def utc_offset_hours(tz: dt.tzinfo, when: dt.datetime) -> float:
     """The zone's offset from UTC at `when` (daylight saving included), hours."""
     local = when.astimezone(tz) if when.tzinfo else when.replace(tzinfo=tz)
-    return local.utcoffset().total_seconds() / 3600.0
+    offset = local.utcoffset()
+    if offset is None:
+        raise ExifError(f"time zone {tz!r} gives no UTC offset")
+    return offset.total_seconds() / 3600.0
 
 
 def local_start(day: dt.date, hours: float, tz: dt.tzinfo) -> dt.datetime:
@@ -79,12 +82,12 @@ def sequence_files(first_path: str, count: Optional[int] = None) -> List[str]:
     if m is None:
         raise ExifError(f"{first_path}: not a numbered image of a sequence")
     prefix, digits, ext = m.groups()
-    numbers = {}
+    numbers: Dict[int, str] = {}
     for other in os.listdir(folder or "."):
         o = _NUMBERED.match(other)
         if o and o.group(1) == prefix and o.group(3).lower() == ext.lower():
             numbers.setdefault(int(o.group(2)), other)
-    out = []
+    out: List[str] = []
     n = int(digits)
     while n in numbers and (count is None or len(out) < count):
         out.append(os.path.join(folder, numbers[n]))

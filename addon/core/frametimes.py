@@ -152,7 +152,8 @@ def chronological(frames: Sequence[int], times: Optional[Sequence[dt.datetime]])
     n = len(frames)
     if times is None:
         return list(range(n))
-    return sorted(range(n), key=lambda i: (times[i], frames[i]))
+    known: Sequence[dt.datetime] = times
+    return sorted(range(n), key=lambda i: (known[i], frames[i]))
 
 
 def seconds_since(times: Sequence[dt.datetime]) -> List[float]:

@@ -8,8 +8,7 @@ value for every frame. Azimuths are unwrapped before fitting and wrapped to
 
 from __future__ import annotations
 
-import math
-from typing import Optional, Sequence
+from typing import List, Optional, Sequence
 
 import numpy as np
 
@@ -54,7 +53,7 @@ def online(frames, values, weights=None, alpha=0.3, window=15):
     Causal: frame k uses frames <= k only. Frames before the first estimate
     get None."""
     t, v, w = _arrays(frames, values, weights)
-    out = []
+    out: List[Optional[float]] = []
     s = None
     hist_t, hist_s = [], []
     for k in range(len(t)):
@@ -104,6 +103,8 @@ def two_pass(frames, values, weights=None, degree=1, iterations=6):
         k = 1.5 * scale
         a = np.abs(np.nan_to_num(r))
         robust = np.where(a <= k, 1.0, k / np.maximum(a, 1e-12))
+    if coef is None:
+        raise ValueError(f"iterations must be at least 1, not {iterations}")
     return [float(y) for y in np.polyval(coef, x)]
 
 
@@ -148,6 +149,8 @@ def two_pass_directions(frames, zenith, azimuth, weights=None, degree=3, iterati
         scale = 1.4826 * np.median(r[good]) + 1e-6
         k = 1.5 * scale
         robust = np.where(r <= k, 1.0, k / np.maximum(r, 1e-12))
+    if fitted is None:
+        raise ValueError(f"iterations must be at least 1, not {iterations}")
     zen = np.degrees(np.arccos(np.clip(fitted[:, 2], -1.0, 1.0)))
     azi = np.degrees(np.arctan2(fitted[:, 0], fitted[:, 1])) % 360.0
     return [float(v) for v in zen], [float(v) for v in azi]
@@ -167,14 +170,15 @@ def online_directions(frames, zenith, azimuth, weights=None, **kw):
     raw[good] = _unit_vectors(z[good], a[good])
     comps = [online(t, [None if not good[i] else raw[i, k] for i in range(len(t))], w, **kw)
              for k in range(3)]
-    zen, azi = [], []
+    zen: List[Optional[float]] = []
+    azi: List[Optional[float]] = []
     for i in range(len(t)):
         if comps[0][i] is None:
             zen.append(None)
             azi.append(None)
             continue
         u = np.array([comps[k][i] for k in range(3)])
-        u /= max(np.linalg.norm(u), 1e-12)
+        u /= max(float(np.linalg.norm(u)), 1e-12)
         zen.append(float(np.degrees(np.arccos(np.clip(u[2], -1.0, 1.0)))))
         azi.append(float(np.degrees(np.arctan2(u[0], u[1])) % 360.0))
     return zen, azi

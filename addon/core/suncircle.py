@@ -113,7 +113,8 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
     rate = None if not times_are_seconds else -math.radians(DEG_PER_HOUR)
     pz = math.acos(max(-1.0, min(1.0, p[2])))
     pa = math.atan2(p[0], p[1])
-    dec = math.asin(max(-1.0, min(1.0, float(centre @ p) / max(1e-9, float(np.linalg.norm(centre))))))
+    dec = math.asin(max(-1.0, min(1.0, float(centre @ p)
+                                  / max(1e-9, float(np.linalg.norm(centre))))))
     _, e1, e2 = _basis(pz, pa)
     hs = np.unwrap(np.arctan2(s @ e2, s @ e1))
     if rate is None:

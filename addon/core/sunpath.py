@@ -153,7 +153,8 @@ def _fit(times, z_obs, a_obs, w, use, sun_position, latitude_deg, longitude_deg,
             for _ in range(8):
                 delta = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-9), g)
                 cand = p + delta
-                if float(residuals(cand, use, robust)[0] @ residuals(cand, use, robust)[0]) < float(r0 @ r0):
+                if (float(residuals(cand, use, robust)[0] @ residuals(cand, use, robust)[0])
+                        < float(r0 @ r0)):
                     p, lam, improved = cand, max(lam / 3, 1e-6), True
                     break
                 lam *= 4

@@ -13,7 +13,7 @@ import math
 import os
 import tempfile
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Literal, Optional, overload
 
 FORMAT_TRACK = "sunlapse.track"
 FORMAT_TRUTH = "sunlapse.truth"
@@ -161,6 +161,18 @@ def write_track(path: str, track: Track) -> None:
 
 _KNOWN = {"format", "version", "clip", "frame_start", "north_offset_deg",
           "method", "initial", "frames"}
+
+
+@overload
+def _number(value: Any, what: str, low: float = ..., high: float = ..., *,
+            allow_null: Literal[False]) -> float:
+    ...
+
+
+@overload
+def _number(value: Any, what: str, low: float = ..., high: float = ...,
+            allow_null: bool = ...) -> Optional[float]:
+    ...
 
 
 def _number(value: Any, what: str, low: float = -math.inf, high: float = math.inf,

@@ -12,7 +12,6 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 import time
 
 import bpy
@@ -21,7 +20,7 @@ import pytest
 
 import scenes
 from conftest import ROOT
-from test_addon import error_lines, make_blend, run_estimate
+from test_addon import make_blend, run_estimate
 
 FOOTAGE = os.path.join(os.path.dirname(ROOT), "shared", "real", "marseille-sundial")
 
@@ -36,7 +35,7 @@ def cli_run(capsys, *argv):
 
 
 def errors(err):
-    return [l for l in err.splitlines() if l.startswith("sunlapse: error:")]
+    return [ln for ln in err.splitlines() if ln.startswith("sunlapse: error:")]
 
 
 def assert_clear_error(code, err, expected_code, *words):
@@ -193,7 +192,7 @@ def test_times_file_missing_or_a_folder(blend, tmp_path, capsys):
 
 
 def test_physical_smoothing_without_place_fits_the_suns_circle_or_says_why(blend, tmp_path,
-                                                                         capsys):
+                                                                           capsys):
     # No place anywhere: the Sun's circle about the pole is fitted instead;
     # on this 3-frame clip it cannot be (4 frames at least), and the track
     # says so and falls back to two-pass. Half a place is an error.
@@ -426,7 +425,7 @@ PAYLOADS = [
 
 @pytest.mark.parametrize("payload", PAYLOADS)
 def test_a_malformed_stored_track_reads_as_no_track(empty_scene, payload, tmp_path):
-    from sunlapse import overlay, panels, results
+    from sunlapse import overlay, results
     text = bpy.data.texts.new(results.TEXT_NAME)
     text.write(payload)
     assert results.load_track() is None

@@ -16,7 +16,8 @@ def local_z(obj):
 
 
 def angle_deg(u, v):
-    return math.degrees(math.acos(min(1.0, float(np.dot(u, v) / np.linalg.norm(u) / np.linalg.norm(v)))))
+    cos = float(np.dot(u, v) / np.linalg.norm(u) / np.linalg.norm(v))
+    return math.degrees(math.acos(min(1.0, cos)))
 
 
 @pytest.mark.parametrize("mode", MODES)

@@ -9,7 +9,7 @@ import zipfile
 import bpy
 import pytest
 
-from conftest import ROOT, sunlapse
+from conftest import ROOT
 
 sys.path.insert(0, os.path.join(ROOT, "tools"))
 import package  # noqa: E402
@@ -73,7 +73,8 @@ def _loader_report(tmp_path, module_src, module_name):
     shutil.copy(os.path.join(ROOT, "addon", "native_loader.py"), pkg)
     if module_src:
         shutil.copy(module_src, pkg / module_name)
-    code = ("import sys; sys.path.insert(0, sys.argv[1]); from fake_addon import native_loader as n;"
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); "
+            "from fake_addon import native_loader as n;"
             "print(n._native is None); print('\\n'.join(n.DIAGNOSIS))")
     out = subprocess.run(["/usr/bin/python3", "-c", code, str(tmp_path / "pkg")],
                          capture_output=True, text=True, timeout=60, check=True).stdout
@@ -93,8 +94,8 @@ def test_loader_names_the_missing_library(tmp_path):
     from sunlapse import native_loader
     broken = tmp_path / "broken.so"
     shutil.copy(native_loader.require().__file__, broken)
-    subprocess.run(["patchelf", "--replace-needed", "liberfa.so.1", "liberfa_gone.so.1", str(broken)],
-                   check=True)
+    subprocess.run(["patchelf", "--replace-needed", "liberfa.so.1", "liberfa_gone.so.1",
+                    str(broken)], check=True)
     lines = _loader_report(tmp_path, str(broken), "_native.cpython-311-x86_64-linux-gnu.so")
     text = "\n".join(lines)
     assert "liberfa_gone.so.1 (needed by _native.cpython-311-x86_64-linux-gnu.so)" in text
@@ -118,9 +119,9 @@ def test_addon_zip_installs_and_enables_in_a_clean_blender(packages, tmp_path):
         "print('INSTALLED', ok, sunlapse.__file__)\n"
         "sys.exit(0 if ok else 1)\n")
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(tmp_path / "scripts"))
-    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
-                           "--python-expr", script], capture_output=True, text=True, env=env,
-                          timeout=300)
+    proc = subprocess.run([bpy.app.binary_path, "-b", "--factory-startup",
+                           "--python-exit-code", "1", "--python-expr", script],
+                          capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    line = next(l for l in proc.stdout.splitlines() if l.startswith("INSTALLED"))
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("INSTALLED"))
     assert str(tmp_path / "scripts") in line  # the installed copy, not the source tree

@@ -121,7 +121,8 @@ def test_exports_read_back(estimated, tmp_path):
     lights = [o for o in bpy.data.objects if o.type == "LIGHT"]
     assert len(lights) == 1 and lights[0].animation_data and lights[0].animation_data.action
     for f in track.frames:
-        err = evaluation.angle_between_deg(lamp_direction(lights[0], f.frame), track_direction(track, f))
+        err = evaluation.angle_between_deg(lamp_direction(lights[0], f.frame),
+                                           track_direction(track, f))
         assert err < 0.05, (f.frame, err)
 
 
@@ -168,7 +169,6 @@ def test_scripted_run_applies_saves_and_renders(tiny_plaza, tmp_path):
 
 
 def test_undo_restores_the_scene_after_apply(estimated):
-    scene = bpy.context.scene
     assert not [o for o in bpy.data.objects if o.type == "LIGHT"]
     bpy.ops.ed.undo_push(message="before apply")
     assert "UNDO" in bpy.types.CLIP_OT_sunlapse_apply_lamp.bl_options
@@ -228,7 +228,7 @@ def test_physical_smoothing_says_what_it_needs(tiny_plaza, tmp_path):
     proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "p.json"),
                         "--smoothing", "physical", "--latitude", "48.85")
     assert proc.returncode == 2
-    line = [l for l in proc.stderr.splitlines() if l.startswith("sunlapse: error:")][0]
+    line = [ln for ln in proc.stderr.splitlines() if ln.startswith("sunlapse: error:")][0]
     assert "--longitude" in line and "--frame-seconds" in line
 
 
@@ -372,7 +372,8 @@ def _exif_sequence(frames_dir, out_dir, local_times, order, gps):
         img = Image.open(os.path.join(frames_dir, f"frame_{src:04d}.png")).convert("RGB")
         t = local_times[src - 1]
         exif = Image.Exif()
-        exif[0x8769] = {0x9003: t.strftime("%Y:%m:%d %H:%M:%S"), 0x9291: f"{t.microsecond // 10000:02d}"}
+        exif[0x8769] = {0x9003: t.strftime("%Y:%m:%d %H:%M:%S"),
+                        0x9291: f"{t.microsecond // 10000:02d}"}
         exif[0x8825] = {1: "N" if gps[0] >= 0 else "S", 2: dms(gps[0]),
                         3: "E" if gps[1] >= 0 else "W", 4: dms(gps[1])}
         path = os.path.join(out_dir, f"img_{k + 1:04d}.jpg")

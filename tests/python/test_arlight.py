@@ -53,5 +53,6 @@ def test_sky_seen_counts_blocked_directions():
     seen = arlight.sky_seen(np.zeros((3, 3), np.float32), lambda o, d: d[:, 0] > 0, n=256)
     assert seen == pytest.approx(0.5, abs=0.02)
     # Cosine weighting: a cone within 30 deg of the zenith holds sin^2(30) = 1/4 of it.
-    seen = arlight.sky_seen(np.zeros((1, 3), np.float32), lambda o, d: d[:, 2] > math.cos(math.radians(30)), n=1024)
+    seen = arlight.sky_seen(np.zeros((1, 3), np.float32),
+                            lambda o, d: d[:, 2] > math.cos(math.radians(30)), n=1024)
     assert seen == pytest.approx(0.75, abs=0.02)

@@ -22,9 +22,11 @@ def test_local_times_are_read_with_the_utc_offset(tmp_path):
 
 def test_iso_times_keep_their_own_offset_and_utc_columns_are_utc(tmp_path):
     p1 = write(tmp_path, "frame, time\n3,2005-01-13T09:00:00+02:00\n", "a.csv")
-    assert frametimes.read_times(p1, utc_offset_hours=1)[3] == dt.datetime(2005, 1, 13, 7, 0, tzinfo=UTC)
+    assert (frametimes.read_times(p1, utc_offset_hours=1)[3]
+            == dt.datetime(2005, 1, 13, 7, 0, tzinfo=UTC))
     p2 = write(tmp_path, "frame,utc_time\n1,2005-01-13 09:00\n", "b.csv")
-    assert frametimes.read_times(p2, utc_offset_hours=5)[1] == dt.datetime(2005, 1, 13, 9, 0, tzinfo=UTC)
+    assert (frametimes.read_times(p2, utc_offset_hours=5)[1]
+            == dt.datetime(2005, 1, 13, 9, 0, tzinfo=UTC))
 
 
 @pytest.mark.parametrize("text,match", [

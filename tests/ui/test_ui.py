@@ -35,8 +35,8 @@ def scene(tmp_path_factory):
 
 
 def results(proc):
-    return {l.split()[1]: l.split(None, 2)[2] for l in proc.stdout.splitlines()
-            if l.startswith("RESULT ") and len(l.split()) > 2}
+    return {ln.split()[1]: ln.split(None, 2)[2] for ln in proc.stdout.splitlines()
+            if ln.startswith("RESULT ") and len(ln.split()) > 2}
 
 
 def fresh_copy(scene, tmp_path):
