@@ -177,11 +177,9 @@ def estimate(native, scene, camera, frames: Sequence[int],
         return result
     directions = sky.directions
     spacing = sky.spacing_deg
-    seg = 0
     bounds = [0]
     for k in range(1, n):
         if path["jump_before"][k]:
-            seg += 1
             bounds.append(k)
             if not starts[k]:
                 result.jumps.append(frames[k])
@@ -267,6 +265,14 @@ def estimate(native, scene, camera, frames: Sequence[int],
             if gray is None or not tracker.initialize(
                     gray, directions[path["direction"][first]]).ok:
                 break
+            # The tracker takes the ground's albedo from this frame under the
+            # Sun it is given: the grid cell's shadows are a little off, so
+            # the frame is refined once and the tracker started again from
+            # the refined Sun (albedo by shadow edges measured, not guessed).
+            r = tracker.track_toward(gray, directions[path["direction"][first]])
+            if r.ok and _angle_deg(r.sun_in_world,
+                                   directions[path["direction"][first]]) <= REFINE_MAX_DEG:
+                tracker.initialize(gray, np.asarray(r.sun_in_world, dtype=float))
             # Backward, the tracker holds from the first measured frame on.
             follow = order.step < 0
             for k in order:
