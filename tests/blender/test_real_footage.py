@@ -70,10 +70,11 @@ def test_march_clip_physical_smoothing_stays_near_the_target(tmp_path, native):
     truth = real.truth_track(os.path.join(FOOTAGE, "marseille-2005-03-21.times.csv"),
                              native.sun_position)
     r = evaluation.evaluate("march", real.geographic(track), truth)
-    # Measured 2.05 / 3.23 zenith, 1.22 / 2.23 azimuth (mean / max) with the
-    # whole-clip estimator (1.95 zenith mean before it): the target (mean 2)
-    # is missed by 0.05 deg on zenith, the dial model's own +2-4 deg bias
-    # around noon (README); the bound holds the result near it.
+    # Measured 2.05-2.09 / 3.23-3.29 zenith, 1.22-1.25 / 2.23-2.28 azimuth
+    # (mean / max) with the whole-clip estimator (1.95 zenith mean before
+    # it): the target (mean 2) is missed by 0.05-0.09 deg on zenith, the dial
+    # model's own +2-4 deg bias around noon (README); the bound holds the
+    # result near it.
     assert r.frames_estimated == 40
     assert r.zenith.mean < 2.2 and r.azimuth.mean < 2.0
     assert r.zenith.max < 5.0 and r.azimuth.max < 5.0
