@@ -172,26 +172,16 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
 def export_csv(track, path):
     """frame, zenith_deg, azimuth_deg, confidence (one row per frame),
     written atomically (a temporary file in the same folder, renamed)."""
-    import tempfile
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".csv", dir=folder)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(["frame", "zenith_deg", "azimuth_deg", "confidence"])
-            for f in track.frames:
-                w.writerow([f.frame,
-                            "" if f.zenith_deg is None else f"{f.zenith_deg:.6f}",
-                            "" if f.azimuth_deg is None else f"{f.azimuth_deg:.6f}",
-                            f"{f.confidence:.4f}"])
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    import io
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(["frame", "zenith_deg", "azimuth_deg", "confidence"])
+    for f in track.frames:
+        w.writerow([f.frame,
+                    "" if f.zenith_deg is None else f"{f.zenith_deg:.6f}",
+                    "" if f.azimuth_deg is None else f"{f.azimuth_deg:.6f}",
+                    f"{f.confidence:.4f}"])
+    trackfile.write_text_atomic(path, buf.getvalue(), suffix=".csv", newline="")
 
 
 def export_gltf(context, sun_obj, path):

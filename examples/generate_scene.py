@@ -452,6 +452,19 @@ def parse_args(argv):
     return args
 
 
+def new_scene():
+    """An empty file with the two collections every generated scene has: the
+    model a user would have, and what only the footage shows."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.context.preferences.filepaths.save_version = 0  # no .blend1 backups
+    scene = bpy.context.scene
+    model = bpy.data.collections.new("Model")
+    extras = bpy.data.collections.new("FootageOnly")
+    scene.collection.children.link(model)
+    scene.collection.children.link(extras)
+    return scene, model, extras
+
+
 def main(argv):
     args = parse_args(argv)
     native = native_loader.require()
@@ -480,13 +493,7 @@ def main(argv):
     north = preset["north_offset_deg"]
     mid_az_world = suns[len(suns) // 2][1] + north
 
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.context.preferences.filepaths.save_version = 0  # no .blend1 backups
-    scene = bpy.context.scene
-    model = bpy.data.collections.new("Model")
-    extras = bpy.data.collections.new("FootageOnly")
-    scene.collection.children.link(model)
-    scene.collection.children.link(extras)
+    scene, model, extras = new_scene()
     ground_mat = ground_material(preset["ground"])
     ground = build_layout(preset["layout"], model, extras, ground_mat)
     if preset["layout"] == "room":
@@ -649,13 +656,7 @@ def main_random(args, native):
     north = spec["north_offset_deg"]
     strength = [random_scene.sun_strength_factor(spec, i) for i in range(frames)]
 
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.context.preferences.filepaths.save_version = 0  # no .blend1 backups
-    scene = bpy.context.scene
-    model = bpy.data.collections.new("Model")
-    extras = bpy.data.collections.new("FootageOnly")
-    scene.collection.children.link(model)
-    scene.collection.children.link(extras)
+    scene, model, extras = new_scene()
     g = spec["ground"]
     mats = {"grey": _principled("concrete", (0.55, 0.53, 0.5)),
             "dark": _principled("painted_metal", (0.12, 0.14, 0.16), roughness=0.5),

@@ -139,14 +139,15 @@ def to_text(d: Dict[str, Any]) -> str:
     return json.dumps(d, indent=1, allow_nan=False) + "\n"
 
 
-def write_track(path: str, track: Track) -> None:
-    """Writes atomically: a crash mid-write never leaves a half file behind."""
-    text = to_text(to_json(track))
+def write_text_atomic(path: str, text: str, suffix: str = ".json", newline=None) -> None:
+    """Writes `text` to `path` atomically: a temporary file in the same
+    folder, renamed over it, so a crash mid-write never leaves a half file
+    and an existing file stays as it was until the new one is whole."""
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=".json", dir=folder)
+    fd, tmp = tempfile.mkstemp(prefix=".sunlapse-", suffix=suffix, dir=folder)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        with os.fdopen(fd, "w", encoding="utf-8", newline=newline) as fh:
             fh.write(text)
         # mkstemp makes the file private; give it the usual mode.
         umask = os.umask(0)
@@ -157,6 +158,11 @@ def write_track(path: str, track: Track) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def write_track(path: str, track: Track) -> None:
+    """Writes atomically: a crash mid-write never leaves a half file behind."""
+    write_text_atomic(path, to_text(to_json(track)))
 
 
 _KNOWN = {"format", "version", "clip", "frame_start", "north_offset_deg",
