@@ -153,8 +153,11 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   // Backward: beta[d] at frame t, the best cost of frames t+1..T-1 from d;
   // alpha + beta is the best whole path through (t, d). The path's own
   // margin at t: how much more the best path through a far direction costs.
+  // Margins need directions well away from the chosen one.
+  const double exclusion =
+      std::max(o.rival_exclusion_deg, 2.5 * grid.spacing_deg());
+  const double cos_x = std::cos(exclusion * kDeg);
   std::vector<double> beta(D, 0.0), ahead(D), beta_next(D);
-  std::vector<std::vector<double>> through(T);
   for (int t = T - 1; t >= 0; --t) {
     if (t < T - 1) {
       for (int d = 0; d < D; ++d)
@@ -162,15 +165,19 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       relax(ahead, t + 1, &beta_next, nullptr, nullptr);
       std::swap(beta, beta_next);
     }
-    through[t].resize(D);
-    for (int d = 0; d < D; ++d)
-      through[t][d] = alpha[static_cast<size_t>(t) * D + d] + beta[d];
+    const int c = out.direction[t];
+    const float* alpha_t = &alpha[static_cast<size_t>(t) * D];
+    double path_rival = kInf;
+    for (int k = 0; k < D; ++k) {
+      if (grid.direction(k).dot(grid.direction(c)) < cos_x) {
+        path_rival = std::min(path_rival, alpha_t[k] + beta[k]);
+      }
+    }
+    out.path_margin[t] =
+        static_cast<float>(std::min(1e6, path_rival - (alpha_t[c] + beta[c])));
   }
   // Per frame: the frame's own support for the chosen direction: how much
   // more the best direction well away from it costs (log-likelihood).
-  const double exclusion =
-      std::max(o.rival_exclusion_deg, 2.5 * grid.spacing_deg());
-  const double cos_x = std::cos(exclusion * kDeg);
   for (int t = 0; t < T; ++t) {
     const int c = out.direction[t];
     const double own = cost_of(t, c);
@@ -182,14 +189,6 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     out.explained[t] = static_cast<float>(evidence.BestExplained(t));
     out.significance[t] = static_cast<float>(evidence.Significance(t));
     out.margin[t] = static_cast<float>(rival - own);
-    double path_rival = kInf;
-    for (int k = 0; k < D; ++k) {
-      if (grid.direction(k).dot(grid.direction(c)) < cos_x) {
-        path_rival = std::min(path_rival, through[t][k]);
-      }
-    }
-    out.path_margin[t] =
-        static_cast<float>(std::min(1e6, path_rival - through[t][c]));
     out.measured[t] = out.significance[t] >= o.min_significance &&
                       out.margin[t] >= o.min_margin;
   }
