@@ -45,9 +45,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   try {
     sunlapse::VideoReader reader(file.string());
-    // The reader must refuse frames too large to be footage; more than this
-    // reaching here is a finding (memory limits would also catch it).
-    if (static_cast<int64_t>(reader.width()) * reader.height() > (1 << 27)) {
+    // The reader must refuse frames too large to be footage.
+    if (static_cast<int64_t>(reader.width()) * reader.height() >
+        sunlapse::VideoReader::kMaxFramePixels) {
       std::fprintf(stderr, "accepted a %dx%d frame\n", reader.width(),
                    reader.height());
       __builtin_trap();
