@@ -194,9 +194,12 @@ struct VideoReader::Movie {
   int64_t IndexOfFrame() const {
     const int64_t pts = decoder.frame()->best_effort_timestamp;
     if (pts == AV_NOPTS_VALUE || frame_seconds <= 0.0) return -1;
-    const double seconds =
-        (pts - first_pts) * av_q2d(decoder.stream()->time_base);
-    return std::llround(seconds / frame_seconds);
+    // In double: corrupt time stamps may be far apart enough to overflow.
+    const double seconds = (static_cast<double>(pts) - first_pts) *
+                           av_q2d(decoder.stream()->time_base);
+    const double index = seconds / frame_seconds;
+    return std::isfinite(index) && std::fabs(index) < 1e15 ? std::llround(index)
+                                                           : -1;
   }
 };
 
@@ -207,7 +210,8 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
   const fs::path p(path);
   std::smatch m;
   const std::string name = p.filename().string();
-  static const std::regex kNumbered(R"((.*?)(\d+)(\.[A-Za-z]+)$)");
+  // At most 9 digits: the number must fit an int.
+  static const std::regex kNumbered(R"((.*?)(\d{1,9})(\.[A-Za-z]+)$)");
   if (IsImageExtension(p.extension().string()) &&
       std::regex_match(name, m, kNumbered)) {
     is_sequence_ = true;
@@ -437,9 +441,12 @@ bool VideoReader::Seek(int index) {
   // To the key frame at or before the target, then decode up to it; the
   // frames' time stamps say where we are.
   const AVStream* st = mv.decoder.stream();
-  const int64_t target =
-      mv.first_pts + static_cast<int64_t>(std::llround(
-                         index * mv.frame_seconds / av_q2d(st->time_base)));
+  // In double, clamped: a corrupt time base or rate must not overflow.
+  const double ticks = static_cast<double>(mv.first_pts) +
+                       index * mv.frame_seconds / av_q2d(st->time_base);
+  const int64_t target = std::isfinite(ticks) && std::fabs(ticks) < 9e18
+                             ? std::llround(ticks)
+                             : mv.first_pts;
   mv.pending = false;
   if (mv.decoder.SeekTo(target)) {
     int64_t at = -1;

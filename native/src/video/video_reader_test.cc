@@ -257,6 +257,17 @@ TEST(VideoReader, RefusesFramesTooLargeToBeFootage) {
   EXPECT_EQ(VideoReader(PngClaiming(d, 1, 1)).width(), 1);
 }
 
+TEST(VideoReader, ANumberTooLongForAnIntStillReads) {
+  const fs::path d = TempDir("long");
+  const std::string path = (d / "f_123456789012.png").string();
+  cv::imwrite(path, Frame(1));
+  VideoReader r(path);  // threw std::out_of_range from std::stoi
+  EXPECT_EQ(r.num_frames(), 1);
+  cv::Mat f;
+  ASSERT_TRUE(r.Read(&f));
+  EXPECT_EQ(r.last_frame().status, FrameStatus::kOk);
+}
+
 TEST(VideoReader, LinearGrayUndoesGamma) {
   cv::Mat img(1, 1, CV_8UC3, cv::Scalar(128, 128, 128));
   const cv::Mat g = ToLinearGray(img, 2.2);
