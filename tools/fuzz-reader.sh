@@ -4,7 +4,9 @@
 #   bash tools/fuzz-reader.sh [SECONDS]    (default 300)
 # Builds build/fuzz/video_reader_fuzz, seeds build/fuzz/seeds with tiny clips
 # made by ffmpeg, writes new inputs to build/fuzz/corpus and any crash to
-# build/fuzz/crash-*. Exits non-zero when the fuzzer found a crash.
+# build/fuzz/crash-*. Exits non-zero when the fuzzer found a crash, a hang
+# over 10 s or one allocation over 512 MB (a frame at the reader's size limit
+# needs less).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-300}"
@@ -37,11 +39,18 @@ seed 2 .gif -frames:v 4
 seed 3 .png -frames:v 1
 seed 4 .jpg -frames:v 1
 seed 5 .avi -frames:v 4 -c:v mjpeg
+# A tiny PNG whose header claims 16000x16000: the reader must refuse it
+# without allocating the frame (FFmpeg skips the header CRC by default).
+ffmpeg -loglevel error -y -f lavfi -i testsrc=size=8x8 -frames:v 1 "$out/seeds/tmp.png"
+{ printf '\x03'; cat "$out/seeds/tmp.png"; } >"$out/seeds/huge.png"
+printf '\x00\x00\x3e\x80\x00\x00\x3e\x80' |
+  dd of="$out/seeds/huge.png" bs=1 seek=17 conv=notrunc status=none
+rm -f "$out/seeds/tmp.png"
 
 log="$out/fuzz.log"
 set +e
 (cd "$out" && ./video_reader_fuzz -max_total_time="$seconds" \
-  -rss_limit_mb=2048 -timeout=10 -max_len=65536 -print_final_stats=1 \
+  -rss_limit_mb=2048 -malloc_limit_mb=512 -timeout=10 -max_len=65536 -print_final_stats=1 \
   corpus seeds) >"$log" 2>&1
 status=$?
 set -e
