@@ -13,11 +13,21 @@ seconds="${1:-300}"
 out=build/fuzz
 mkdir -p "$out/seeds" "$out/corpus"
 
+# Not in tools/install.sh's list: only this script needs them.
+if ! command -v clang++-14 >/dev/null ||
+  ! ls /usr/lib/llvm-14/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a \
+    >/dev/null 2>&1; then
+  echo "fuzz-reader: needs clang 14 with libFuzzer:" \
+    "apt-get install clang-14 libclang-rt-14-dev" >&2
+  exit 2
+fi
 # Only FFmpeg and OpenCV's core are linked: the reader needs nothing else.
-flags="-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined"
-flags+=" -fno-sanitize-recover=undefined"
-# shellcheck disable=SC2046
-clang++-14 $flags -Inative/include $(pkg-config --cflags opencv4 libavformat) \
+# shellcheck disable=SC2054  # the commas are inside one flag
+flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer
+  -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined)
+# shellcheck disable=SC2046  # pkg-config's flags are meant to split
+clang++-14 "${flags[@]}" -Inative/include \
+  $(pkg-config --cflags opencv4 libavformat) \
   native/src/video/video_reader_fuzz.cc native/src/video/video_reader.cc \
   -o "$out/video_reader_fuzz" \
   $(pkg-config --libs libavformat libavcodec libswscale libavutil) \
@@ -30,7 +40,7 @@ seed() {  # index extension ffmpeg-output-args...
   shift 2
   local tmp="$out/seeds/tmp$ext"
   ffmpeg -loglevel error -y -f lavfi -i testsrc=size=32x24:rate=4 "$@" "$tmp"
-  { printf "\\x$(printf %02x "$i")"; cat "$tmp"; } >"$out/seeds/seed$ext"
+  { printf '%b' "\\x$(printf %02x "$i")"; cat "$tmp"; } >"$out/seeds/seed$ext"
   rm -f "$tmp"
 }
 seed 0 .mp4 -frames:v 4 -pix_fmt yuv420p -c:v libx264 -g 2
