@@ -1,11 +1,14 @@
 #include "sunlapse/video/video_reader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
 #include <regex>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -40,6 +43,8 @@ void QuietFfmpeg() {
   std::call_once(once, [] { av_log_set_level(AV_LOG_FATAL); });
 }
 
+constexpr int64_t kMaxPixels = VideoReader::kMaxFramePixels;
+
 // One opened video stream and its decoder (a movie, or one image file).
 class Decoder {
  public:
@@ -63,18 +68,30 @@ class Decoder {
     // Images carry their codec in the name or the header; probing decodes.
     if (!single_image || format_->nb_streams == 0 ||
         format_->streams[0]->codecpar->codec_id == AV_CODEC_ID_NONE) {
-      if ((err = avformat_find_stream_info(format_, nullptr)) < 0)
-        return AvError(err);
+      // Probing decodes too: the same size limit for its decoders.
+      std::vector<AVDictionary*> probe(format_->nb_streams, nullptr);
+      for (auto& d : probe) av_dict_set_int(&d, "max_pixels", kMaxPixels, 0);
+      err = avformat_find_stream_info(format_, probe.data());
+      for (auto& d : probe) av_dict_free(&d);
+      if (err < 0) return AvError(err);
     }
     const AVCodec* codec = nullptr;
     stream_ =
         av_find_best_stream(format_, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
     if (stream_ < 0 || codec == nullptr)
       return "no video stream with a known codec";
+    const AVCodecParameters* par = format_->streams[stream_]->codecpar;
+    if (static_cast<int64_t>(par->width) * par->height > kMaxPixels) {
+      return "frames of " + std::to_string(par->width) + "x" +
+             std::to_string(par->height) + " pixels, more than the " +
+             std::to_string(kMaxPixels) + " a frame may have";
+    }
     codec_ = avcodec_alloc_context3(codec);
-    if ((err = avcodec_parameters_to_context(
-             codec_, format_->streams[stream_]->codecpar)) < 0)
+    if ((err = avcodec_parameters_to_context(codec_, par)) < 0)
       return AvError(err);
+    // The header may not say the size; the decoder then refuses a frame
+    // larger than the limit before allocating it.
+    codec_->max_pixels = kMaxPixels;
     codec_->thread_count =
         single_image ? 1 : 0;  // 0: FFmpeg picks (one per core)
     if ((err = avcodec_open2(codec_, codec, nullptr)) < 0) return AvError(err);
@@ -177,9 +194,12 @@ struct VideoReader::Movie {
   int64_t IndexOfFrame() const {
     const int64_t pts = decoder.frame()->best_effort_timestamp;
     if (pts == AV_NOPTS_VALUE || frame_seconds <= 0.0) return -1;
-    const double seconds =
-        (pts - first_pts) * av_q2d(decoder.stream()->time_base);
-    return std::llround(seconds / frame_seconds);
+    // In double: corrupt time stamps may be far apart enough to overflow.
+    const double seconds = (static_cast<double>(pts) - first_pts) *
+                           av_q2d(decoder.stream()->time_base);
+    const double index = seconds / frame_seconds;
+    return std::isfinite(index) && std::fabs(index) < 1e15 ? std::llround(index)
+                                                           : -1;
   }
 };
 
@@ -190,7 +210,8 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
   const fs::path p(path);
   std::smatch m;
   const std::string name = p.filename().string();
-  static const std::regex kNumbered(R"((.*?)(\d+)(\.[A-Za-z]+)$)");
+  // At most 9 digits: the number must fit an int.
+  static const std::regex kNumbered(R"((.*?)(\d{1,9})(\.[A-Za-z]+)$)");
   if (IsImageExtension(p.extension().string()) &&
       std::regex_match(name, m, kNumbered)) {
     is_sequence_ = true;
@@ -249,7 +270,7 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
       av_guess_frame_rate(movie_->decoder.format(), stream, nullptr);
   fps_ = rate.num > 0 && rate.den > 0 ? av_q2d(rate) : 0.0;
   movie_->frame_seconds = fps_ > 0.0 ? 1.0 / fps_ : 0.0;
-  if (stream->nb_frames > 0) {
+  if (stream->nb_frames > 0 && stream->nb_frames <= 1000000000) {
     num_frames_ = static_cast<int>(stream->nb_frames);
     num_frames_exact_ = true;
   } else if (fps_ > 0.0) {
@@ -260,14 +281,25 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
       seconds = movie_->decoder.format()->duration /
                 static_cast<double>(AV_TIME_BASE);
     }
-    num_frames_ = static_cast<int>(std::llround(seconds * fps_));
+    // A corrupt header can claim any duration: keep the estimate an int.
+    const double frames = seconds * fps_;
+    num_frames_ = std::isfinite(frames) && frames > 0.0
+                      ? static_cast<int>(std::min(frames, 1e9) + 0.5)
+                      : 0;
   }
   // The first decoded frame fixes the size every frame must have.
-  int err;
+  int err, refused = 0;
   while ((err = movie_->decoder.Next()) < 0 && err != AVERROR_EOF) {
+    refused = err;
   }
   if (err == AVERROR_EOF) {
-    throw std::invalid_argument("path: video has no frames: " + path);
+    // Frames larger than kMaxFramePixels end here too (the decoder refuses
+    // them before their size is known to us).
+    throw std::invalid_argument(
+        "path: video has no frames: " + path +
+        (refused ? " (none could be decoded: " + AvError(refused) +
+                       "; frames larger than 8192x8192 pixels are refused)"
+                 : ""));
   }
   width_ = movie_->decoder.frame()->width;
   height_ = movie_->decoder.frame()->height;
@@ -409,9 +441,12 @@ bool VideoReader::Seek(int index) {
   // To the key frame at or before the target, then decode up to it; the
   // frames' time stamps say where we are.
   const AVStream* st = mv.decoder.stream();
-  const int64_t target =
-      mv.first_pts + static_cast<int64_t>(std::llround(
-                         index * mv.frame_seconds / av_q2d(st->time_base)));
+  // In double, clamped: a corrupt time base or rate must not overflow.
+  const double ticks = static_cast<double>(mv.first_pts) +
+                       index * mv.frame_seconds / av_q2d(st->time_base);
+  const int64_t target = std::isfinite(ticks) && std::fabs(ticks) < 9e18
+                             ? std::llround(ticks)
+                             : mv.first_pts;
   mv.pending = false;
   if (mv.decoder.SeekTo(target)) {
     int64_t at = -1;

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
 #include <unistd.h>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -216,6 +218,54 @@ TEST(VideoReader, MissingOrUndecodableFilesThrow) {
   const fs::path d = TempDir("bad");
   std::ofstream(d / "clip.mp4") << "garbage";
   EXPECT_THROW(VideoReader((d / "clip.mp4").string()), std::invalid_argument);
+}
+
+// A tiny PNG whose header claims `width` x `height` pixels (its one row of
+// data is all it has); the header's CRC is kept valid.
+std::string PngClaiming(const fs::path& d, uint32_t width, uint32_t height) {
+  std::vector<uchar> png;
+  cv::imencode(".png", cv::Mat(1, 1, CV_8UC3, cv::Scalar(1, 2, 3)), png);
+  auto put32 = [&](size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) png[at + i] = (v >> (24 - 8 * i)) & 0xff;
+  };
+  put32(16, width);  // IHDR: 8 signature + 4 length + 4 type
+  put32(20, height);
+  uint32_t crc = 0xffffffffu;  // over the chunk type and its 13 data bytes
+  for (size_t i = 12; i < 12 + 4 + 13; ++i) {
+    crc ^= png[i];
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & -(crc & 1));
+  }
+  put32(29, ~crc);
+  const std::string path = (d / "huge.png").string();
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(png.data()), png.size());
+  return path;
+}
+
+// A 70-byte file must not make the reader allocate gigabytes (FFmpeg's own
+// limit is ~268 million pixels; this header asks for 768 MB per frame).
+TEST(VideoReader, RefusesFramesTooLargeToBeFootage) {
+  const fs::path d = TempDir("huge");
+  const std::string huge = PngClaiming(d, 16000, 16000);
+  rusage before{}, after{};
+  getrusage(RUSAGE_SELF, &before);
+  EXPECT_THROW(VideoReader{huge}, std::invalid_argument);
+  getrusage(RUSAGE_SELF, &after);
+  // ru_maxrss (kB) is the peak so far: it rises if the frame was allocated.
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 200 * 1024);
+  // The same file at its true size opens (the patching keeps it valid).
+  EXPECT_EQ(VideoReader(PngClaiming(d, 1, 1)).width(), 1);
+}
+
+TEST(VideoReader, ANumberTooLongForAnIntStillReads) {
+  const fs::path d = TempDir("long");
+  const std::string path = (d / "f_123456789012.png").string();
+  cv::imwrite(path, Frame(1));
+  VideoReader r(path);  // threw std::out_of_range from std::stoi
+  EXPECT_EQ(r.num_frames(), 1);
+  cv::Mat f;
+  ASSERT_TRUE(r.Read(&f));
+  EXPECT_EQ(r.last_frame().status, FrameStatus::kOk);
 }
 
 TEST(VideoReader, LinearGrayUndoesGamma) {

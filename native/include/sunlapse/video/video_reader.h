@@ -4,6 +4,7 @@
 // drag in OpenCV's imgcodecs/videoio (GDAL, GStreamer, camera drivers ...).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -29,9 +30,14 @@ struct FrameReport {
 
 class VideoReader {
  public:
+  // Frames larger than this (8192 x 8192) are refused: no footage is, and a
+  // tiny corrupt header must not make the reader allocate gigabytes.
+  static constexpr int64_t kMaxFramePixels = int64_t{1} << 26;
+
   // `path`: a movie file, or the first image of a numbered sequence
   // (frame_0001.png, as Blender's MovieClip stores it). Throws
-  // std::invalid_argument when the file is missing or cannot be decoded.
+  // std::invalid_argument when the file is missing or cannot be decoded, or
+  // its frames are larger than kMaxFramePixels.
   explicit VideoReader(const std::string& path);
   ~VideoReader();
   VideoReader(const VideoReader&) = delete;
