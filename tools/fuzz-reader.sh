@@ -13,13 +13,18 @@ seconds="${1:-300}"
 out=build/fuzz
 mkdir -p "$out/seeds" "$out/corpus"
 
+"$PWD/tools/install.sh" >/dev/null  # the project's packages (FFmpeg, OpenCV)
 # Not in tools/install.sh's list: only this script needs them.
 if ! command -v clang++-14 >/dev/null ||
   ! ls /usr/lib/llvm-14/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a \
     >/dev/null 2>&1; then
-  echo "fuzz-reader: needs clang 14 with libFuzzer:" \
-    "apt-get install clang-14 libclang-rt-14-dev" >&2
-  exit 2
+  echo "fuzz-reader: installing clang 14 with libFuzzer (clang-14, libclang-rt-14-dev)"
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -q >/dev/null
+  "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends clang-14 libclang-rt-14-dev \
+    >/dev/null || { echo "fuzz-reader: could not install clang-14 libclang-rt-14-dev" >&2; exit 2; }
 fi
 # Only FFmpeg and OpenCV's core are linked: the reader needs nothing else.
 # shellcheck disable=SC2054  # the commas are inside one flag
