@@ -274,7 +274,11 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
                 continue
             m = int(sel.sum())
             distinct = len(np.unique(d[sel]))
-            degree = min(2 if m >= 6 else (1 if m >= 3 else 0), distinct - 1)
+            # A quadratic where the frame has measured neighbours on both
+            # sides; at a segment's ends it would swing on the last few
+            # values, so a line there.
+            sides = min(int(np.sum(sel & (d < 0))), int(np.sum(sel & (d > 0))))
+            degree = min(2 if (m >= 6 and sides >= 3) else (1 if m >= 3 else 0), distinct - 1)
             x = np.vander(d[sel], degree + 1, increasing=True)
             sw = np.sqrt(kern[sel])[:, None]
             coef = np.linalg.lstsq(x * sw, raw[sel] * sw, rcond=None)[0]
