@@ -17,7 +17,7 @@ from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
 from .estimate import whole_clip
-from .core import frametimes, smoothing, suncircle, sunpath, trackfile
+from .core import angles, frametimes, smoothing, suncircle, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -208,12 +208,10 @@ def estimate_initial(scene, camera, bgr, options: RunOptions, progress=None, gra
 
 def _given_initial(zenith_deg, azimuth_deg, north_offset_deg):
     """An initial result dict for a Sun given by the user (world frame inside)."""
-    import math
-    z = math.radians(zenith_deg)
-    a = math.radians(azimuth_deg + north_offset_deg)
+    azimuth_world_deg = angles.azimuth_world_from_geographic(azimuth_deg, north_offset_deg)
     return {"success": True, "message": "", "zenith_deg": zenith_deg,
-            "azimuth_deg": (azimuth_deg + north_offset_deg) % 360.0,
-            "sun_in_world": (math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)),
+            "azimuth_deg": azimuth_world_deg,
+            "sun_in_world": tuple(angles.sun_in_world_from_angles(zenith_deg, azimuth_world_deg)),
             "residual_rms": 0.0, "confidence": 1.0, "spread_deg": 0.0, "sun_intensity": None,
             "ambient_intensity": None, "seconds": 0.0}
 
@@ -507,14 +505,19 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
     track.method["initial"] = track.method["tracking"] = "whole_clip"
     by_frame = {r.frame: r for r in result.frames}
     raws = []
+    geographic = {}  # frame -> (zenith, geographic azimuth)
     for f in frames:
         r = by_frame[f]
-        az = None if r.azimuth_world_deg is None else (r.azimuth_world_deg - north) % 360.0
-        raws.append((f, r.zenith_deg, az, r.confidence, r.reason, r.tracked))
+        if r.sun_in_world is None:
+            raws.append((f, None, None, r.confidence, r.reason, r.tracked))
+            continue
+        z, a_world = angles.angles_from_sun_in_world(r.sun_in_world)
+        geographic[f] = (float(z), float(angles.azimuth_geographic_from_world(a_world, north)))
+        raws.append((f, *geographic[f], r.confidence, r.reason, r.tracked))
     if result.anchor is not None:
         a = by_frame[result.anchor]
-        track.initial = {"frame": a.frame, "zenith_deg": a.zenith_deg,
-                         "azimuth_deg": (a.azimuth_world_deg - north) % 360.0,
+        track.initial = {"frame": a.frame, "zenith_deg": geographic[a.frame][0],
+                         "azimuth_deg": geographic[a.frame][1],
                          "residual": None, "confidence": a.confidence,
                          "seconds": result.timing.get("table_s", 0.0)
                          + result.timing.get("reference_s", 0.0),
@@ -525,7 +528,7 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
             anchor_bgr = None
         if anchor_bgr is not None:
             _note_unmodelled_shadows(track, scene, camera, a.frame, anchor_bgr,
-                                     whole_clip.sun_in_world(a.zenith_deg, a.azimuth_world_deg),
+                                     a.sun_in_world,
                                      list(samples.values()), options)
     elif result.message:
         track.extra["message"] = result.message

@@ -55,11 +55,11 @@ FOLLOWED_BEYOND_CONFIDENCE = 0.25
 
 @dataclass
 class RawFrame:
-    """One frame's raw estimate. Angles are world-frame (azimuth from +Y);
-    None with a reason when the frame has no estimate."""
+    """One frame's raw estimate: the unit vector toward the Sun in the world
+    frame (angles are the caller's: core.angles), or None with a reason when
+    the frame has no estimate."""
     frame: int
-    zenith_deg: Optional[float] = None
-    azimuth_world_deg: Optional[float] = None
+    sun_in_world: Optional[np.ndarray] = None
     confidence: float = 0.0
     reason: Optional[str] = None
     segment: int = 0
@@ -83,18 +83,6 @@ class WholeClipResult:
 
 class Cancelled(Exception):
     """The progress callback asked to stop."""
-
-
-def sun_in_world(zenith_deg: float, azimuth_world_deg: float) -> np.ndarray:
-    z, a = math.radians(zenith_deg), math.radians(azimuth_world_deg)
-    return np.array([math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)])
-
-
-def angles_of(sun_in_world_vec) -> tuple:
-    x, y, z = (float(v) for v in sun_in_world_vec)
-    n = math.sqrt(x * x + y * y + z * z)
-    zen = math.degrees(math.acos(max(-1.0, min(1.0, z / n))))
-    return zen, math.degrees(math.atan2(x, y)) % 360.0
 
 
 def _angle_deg(a, b) -> float:
@@ -190,8 +178,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
                        "margin": [round(float(v), 2) for v in margins],
                        "significance": [round(float(v), 1) for v in path["significance"]],
                        "path_margin": [round(float(v), 1) for v in path["path_margin"]],
-                       "path_world_deg": [[round(v, 2) for v in angles_of(directions[d])]
-                                          for d in path["direction"]]}
+                       "path_sun_in_world": [[round(float(v), 5) for v in directions[d]]
+                                             for d in path["direction"]]}
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None
 
@@ -231,7 +219,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
                     break
         support = max(0.0, min(1.0, path["path_margin"][k] / FULL_CONFIDENCE_MARGIN))
         if refined is not None:
-            raw.zenith_deg, raw.azimuth_world_deg = refined.zenith_deg, refined.azimuth_deg
+            raw.sun_in_world = np.asarray(refined.sun_in_world, dtype=float)
             raw.refined, raw.tracked, raw.reason = True, refined, None
             if measured[k]:
                 raw.confidence = refined.confidence * support
@@ -241,7 +229,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         elif beyond:
             raw.reason = "shadow lost beyond the frames with shadow evidence"
         else:
-            raw.zenith_deg, raw.azimuth_world_deg = angles_of(d)
+            raw.sun_in_world = np.asarray(d, dtype=float)
             raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE
         return refined is not None
 

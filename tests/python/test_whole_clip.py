@@ -23,6 +23,7 @@ if "sunlapse" not in sys.modules:
 native = pytest.importorskip("_native")
 sys.modules.setdefault("sunlapse._native", native)
 from sunlapse import pipeline  # noqa: E402
+from sunlapse.core import angles  # noqa: E402
 from sunlapse.estimate import whole_clip  # noqa: E402
 
 W, H = 320, 200
@@ -51,8 +52,7 @@ def box(lo, hi, base):
 
 
 def sun(zenith, azimuth):
-    z, a = math.radians(zenith), math.radians(azimuth)
-    return np.array([math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)])
+    return angles.sun_in_world_from_angles(zenith, azimuth)
 
 
 def path(k, n):
@@ -102,8 +102,8 @@ def draw(world, d, seed=0):
     return np.clip(img + noise, 0, 1).astype(np.float32)
 
 
-def error_deg(zenith, azimuth, truth):
-    u = sun(zenith, azimuth)
+def error_deg(u, truth):
+    u = np.asarray(u, float)
     return math.degrees(math.atan2(np.linalg.norm(np.cross(u, truth)), float(u @ truth)))
 
 
@@ -115,8 +115,11 @@ def run(world, frames_gray, times_s=None):
 
 
 def smooth(result):
-    raws = [(r.frame, r.zenith_deg, r.azimuth_world_deg, r.confidence, r.reason, None)
-            for r in result.frames]
+    raws = []
+    for r in result.frames:
+        z, a = (None, None) if r.sun_in_world is None else angles.angles_from_sun_in_world(
+            r.sun_in_world)
+        raws.append((r.frame, z, a, r.confidence, r.reason, None))
     opts = pipeline.RunOptions()
     return pipeline._smooth_segments([r[0] for r in raws], raws, result.segments, "two_pass",
                                      opts, None)
@@ -133,14 +136,14 @@ def test_every_frame_within_a_degree_despite_a_gradient_and_broken_frames(world)
     assert result.jumps == []
     for k, r in enumerate(result.frames):
         if k in broken and broken[k] is None:
-            assert r.zenith_deg is None and r.reason
+            assert r.sun_in_world is None and r.reason
             continue
         if k in broken:  # garbled: carried by its neighbours, not confident
             assert r.confidence < 0.3, (k, r)
             continue
-        assert error_deg(r.zenith_deg, r.azimuth_world_deg, truth[k]) < 1.0, (k, r)
+        assert error_deg(r.sun_in_world, truth[k]) < 1.0, (k, r)
     # The garbled first frame is beyond the measured span: no estimate.
-    assert result.frames[0].zenith_deg is None
+    assert result.frames[0].sun_in_world is None
 
 
 def test_a_looped_clip_is_split_and_smoothing_keeps_each_side(world):
@@ -153,8 +156,8 @@ def test_a_looped_clip_is_split_and_smoothing_keeps_each_side(world):
     zs, azs = smooth(result)
     for k in range(2 * n):
         raw = result.frames[k]
-        raw_error = error_deg(raw.zenith_deg, raw.azimuth_world_deg, truth[k])
-        smooth_error = error_deg(zs[k], azs[k], truth[k])
+        raw_error = error_deg(raw.sun_in_world, truth[k])
+        smooth_error = error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), truth[k])
         assert smooth_error < max(1.0, 2 * raw_error), (k, raw_error, smooth_error)
 
 
@@ -165,10 +168,10 @@ def test_an_undecodable_tail_has_no_estimate_and_is_not_extrapolated(world):
     result = run(world, frames)
     zs, azs = smooth(result)
     for k in range(14, n):
-        assert result.frames[k].zenith_deg is None and result.frames[k].reason
+        assert result.frames[k].sun_in_world is None and result.frames[k].reason
         assert zs[k] is None and azs[k] is None
     for k in range(14):
-        assert error_deg(zs[k], azs[k], truth[k]) < 1.0
+        assert error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), truth[k]) < 1.0
 
 
 def test_capture_times_going_back_start_a_segment(world):
