@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "arrays.h"
+#include "images.h"
 #include "options.h"
 #include "sunlapse/initial/initial_sun.h"
 #include "sunlapse/tracking/shadow_tracker.h"
@@ -145,28 +146,6 @@ void BindOptions(py::module_& m) {
              "Hard edge: rim energy at least this times the ground's median.")
       .field("registration_px", &UnmodelledShadowOptions::registration_px,
              "Compared with the darkest background within this many pixels.");
-}
-
-// A cv::Mat viewing (not copying) a checked numpy image: float32 (H,W), or
-// (H,W,3) too with `colour`.
-cv::Mat FloatView(const py::array& a, const char* name, bool colour = false) {
-  const bool three = colour && a.ndim() == 3;
-  const float* data = three ? CheckArray<float>(a, name, {-1, -1, 3})
-                            : CheckArray<float>(a, name, {-1, -1});
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
-                 CV_32FC(three ? 3 : 1), const_cast<float*>(data));
-}
-
-// The same for a uint8 (H,W) mask.
-cv::Mat MaskView(const py::array& a, const char* name) {
-  const uint8_t* data = CheckArray<uint8_t>(a, name, {-1, -1});
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
-                 CV_8UC1, const_cast<uint8_t*>(data));
-}
-
-cv::Mat GrayArg(const py::object& frame) {
-  if (frame.is_none()) return {};  // an undecodable frame
-  return FloatView(frame.cast<py::array>(), "frame");
 }
 
 // initialize() and track() of a tracker class, with the GIL released.

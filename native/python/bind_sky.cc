@@ -7,21 +7,11 @@
 #include <opencv2/core.hpp>
 
 #include "arrays.h"
+#include "images.h"
 #include "sunlapse/sky/sky_evidence.h"
 #include "sunlapse/sky/sun_path.h"
 
 namespace sunlapse::python {
-namespace {
-
-cv::Mat GrayOrEmpty(const py::object& frame) {
-  if (frame.is_none()) return {};
-  const py::array a = frame.cast<py::array>();
-  const float* data = CheckArray<float>(a, "frame", {-1, -1});
-  return cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
-                 CV_32FC1, const_cast<float*>(data));
-}
-
-}  // namespace
 
 void BindSky(py::module_& m) {
   py::class_<SkyEvidenceOptions>(m, "SkyEvidenceOptions",
@@ -110,8 +100,7 @@ void BindSky(py::module_& m) {
           [](SkyEvidence& e, const py::list& frames) {
             std::vector<cv::Mat> mats;
             for (const py::handle& f : frames)
-              mats.push_back(
-                  GrayOrEmpty(py::reinterpret_borrow<py::object>(f)));
+              mats.push_back(GrayArg(py::reinterpret_borrow<py::object>(f)));
             py::gil_scoped_release release;
             return e.SetReference(mats);
           },
@@ -122,7 +111,7 @@ void BindSky(py::module_& m) {
       .def(
           "add_frame",
           [](SkyEvidence& e, const py::object& frame) {
-            const cv::Mat img = GrayOrEmpty(frame);
+            const cv::Mat img = GrayArg(frame);
             py::gil_scoped_release release;
             return e.AddFrame(img);
           },

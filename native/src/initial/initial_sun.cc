@@ -125,18 +125,6 @@ class DirectionCost {
   int evaluations_ = 0;
 };
 
-std::vector<Eigen::Vector3d> FibonacciHemisphere(int n, double max_zenith_deg) {
-  std::vector<Eigen::Vector3d> out;
-  const double zmin = std::cos(max_zenith_deg * kDeg);
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int k = 0; k < n; ++k) {
-    const double z = 1.0 - (k + 0.5) / n * (1.0 - zmin);
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    out.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
-  }
-  return out;
-}
-
 struct Evaluated {
   Eigen::Vector3d dir;
   double cost;
@@ -282,8 +270,7 @@ void EstimateDefault(const Scene& scene, const Samples& s,
                      const ProgressCallback& progress, int num_objects,
                      InitialSunResult* out) {
   DirectionCost cost(scene, s, out->loss_scale_abs);
-  const auto candidates =
-      FibonacciHemisphere(o.num_candidates, o.max_zenith_deg);
+  const auto candidates = FibonacciSky(o.num_candidates, o.max_zenith_deg);
   std::vector<Evaluated> seen;
   seen.reserve(candidates.size() * 4);
   for (size_t k = 0; k < candidates.size(); ++k) {

@@ -1,5 +1,7 @@
 #include "sunlapse/sky/sky_evidence.h"
 
+#include "sunlapse/common/angles.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -31,14 +33,8 @@ SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
   Require(num_directions >= 16, "num_directions must be >= 16");
   Require(max_zenith_deg > 0 && max_zenith_deg <= 90,
           "max_zenith_deg must be in (0, 90]");
+  directions_ = FibonacciSky(num_directions, max_zenith_deg);
   const double zmin = std::cos(max_zenith_deg * kDeg);
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int k = 0; k < num_directions; ++k) {
-    const double z = 1.0 - (k + 0.5) / num_directions * (1.0 - zmin);
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    directions_.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k),
-                             z);
-  }
   // Solid angle per direction -> the side of a square of that area.
   const double solid = 2.0 * M_PI * (1.0 - zmin) / num_directions;
   spacing_deg_ = std::sqrt(solid) / kDeg;
@@ -119,11 +115,6 @@ struct SkyEvidence::Impl {
   std::vector<Eigen::Vector2f> pixels;
   std::vector<int> group;
   int num_groups = 0;
-  // Per direction the samples it does not light (in shade or facing away),
-  // as offsets into one array: usually the smaller side, so a frame's sums
-  // run over them and the lit side is the group's total minus them.
-  std::vector<int32_t> shaded;
-  std::vector<int64_t> shaded_begin;  // size D + 1
   // Per direction the band around its predicted shadow boundaries: samples
   // within band_steps grid steps of a neighbour (same group) of the other
   // state; s when lit, ~s when in shade. Only the band is scored: a shadow
@@ -233,8 +224,7 @@ struct SkyEvidence::Impl {
       const int32_t j = at(cells[i].first + 1, cells[i].second);
       if (j >= 0 && group[j] == group[i]) right[i] = j;
     }
-    std::vector<std::vector<int32_t>> per_direction(grid.size()),
-        band_of(grid.size());
+    std::vector<std::vector<int32_t>> band_of(grid.size());
     const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
     const int steps = o.band_steps;
     tbb::parallel_for(0, grid.size(), [&](int d) {
@@ -245,7 +235,6 @@ struct SkyEvidence::Impl {
       std::vector<uint8_t> lit(s_count);
       for (int i = 0; i < s_count; ++i) {
         lit[i] = !occluded[i] && normal[i].dot(dir) > 0.02f;
-        if (!lit[i]) per_direction[d].push_back(i);
       }
       // Boundary samples, then grown by `steps` grid steps within the group.
       std::vector<int> dist(s_count, -1), queue;
@@ -275,26 +264,22 @@ struct SkyEvidence::Impl {
       }
       for (int i : queue) band_of[d].push_back(lit[i] ? i : ~i);
     });
-    auto flatten = [&](std::vector<std::vector<int32_t>>& lists,
-                       std::vector<int32_t>* flat_out,
-                       std::vector<int64_t>* begin) {
-      begin->assign(grid.size() + 1, 0);
-      for (int d = 0; d < grid.size(); ++d) {
-        (*begin)[d + 1] = (*begin)[d] + static_cast<int64_t>(lists[d].size());
-      }
-      flat_out->resize(begin->back());
-      for (int d = 0; d < grid.size(); ++d) {
-        std::copy(lists[d].begin(), lists[d].end(),
-                  flat_out->begin() + (*begin)[d]);
-        std::vector<int32_t>().swap(lists[d]);
-      }
-    };
-    flatten(per_direction, &shaded, &shaded_begin);
-    flatten(band_of, &band, &band_begin);
+    // One array for all directions' bands, with offsets.
+    band_begin.assign(grid.size() + 1, 0);
+    for (int d = 0; d < grid.size(); ++d) {
+      band_begin[d + 1] =
+          band_begin[d] + static_cast<int64_t>(band_of[d].size());
+    }
+    band.resize(band_begin.back());
+    for (int d = 0; d < grid.size(); ++d) {
+      std::copy(band_of[d].begin(), band_of[d].end(),
+                band.begin() + band_begin[d]);
+      std::vector<int32_t>().swap(band_of[d]);
+    }
     build_seconds = Seconds(t0);
   }
 
-  // Bilinear intensity at each sample (the frame's own pixels).
+  // The frame's pixel at each sample.
   void Sample(const cv::Mat& f, std::vector<float>* out) const {
     out->resize(S());
     for (int s = 0; s < S(); ++s) {
@@ -325,17 +310,6 @@ bool SkyEvidence::has_reference() const { return !impl_->reference.empty(); }
 int SkyEvidence::num_frames() const { return impl_->frames; }
 const std::vector<uint8_t>& SkyEvidence::scores() const {
   return impl_->scores;
-}
-
-std::vector<uint8_t> SkyEvidence::LitFrom(int direction) const {
-  Require(direction >= 0 && direction < impl_->grid.size(),
-          "direction out of range");
-  std::vector<uint8_t> out(impl_->S(), 1);
-  for (int64_t i = impl_->shaded_begin[direction];
-       i < impl_->shaded_begin[direction + 1]; ++i) {
-    out[impl_->shaded[i]] = 0;
-  }
-  return out;
 }
 
 std::vector<float> SkyEvidence::Cost(int k) const {

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace sunlapse {
 
@@ -59,6 +60,20 @@ inline double AzimuthGeographicFromWorld(double azimuth_world_deg,
 inline double AngleBetweenDeg(const Eigen::Vector3d& a,
                               const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) / kRadPerDeg;
+}
+
+// About n nearly uniform directions over the sky from the zenith down to
+// max_zenith_deg (a Fibonacci spiral), world frame.
+inline std::vector<Eigen::Vector3d> FibonacciSky(int n, double max_zenith_deg) {
+  std::vector<Eigen::Vector3d> out;
+  const double zmin = std::cos(max_zenith_deg * kRadPerDeg);
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < n; ++k) {
+    const double z = 1.0 - (k + 0.5) / n * (1.0 - zmin);
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    out.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
+  }
+  return out;
 }
 
 }  // namespace sunlapse

@@ -13,12 +13,13 @@
 // intensity is divided by its own reference level taken from the clip (a high
 // quantile over frames spread through it: its albedo times its usual lit
 // level), which cancels texture, view-dependent reflection and vignetting.
-// Within each planar group of samples (same object, same normal) the frame is
-// explained by two levels, lit and shaded, for the candidate's predicted
-// lit/shaded split; a direction scores by the share of the variance it
-// explains, and only when its predicted shadows are the darker side. So a Sun
-// whose shadows are not dark scores nothing, a smooth brightness gradient is
-// not a shadow, and an exposure change is only a scale.
+// A direction scores by the contrast between the lit and the shaded side of
+// its predicted shadow boundaries (a band a few grid steps wide, per planar
+// group of samples: same object, same normal), only when its predicted shade
+// is the darker side, in log-likelihood units against the noise of
+// neighbouring samples. So a Sun whose shadows are not dark scores nothing, a
+// smooth brightness gradient has no contrast across an edge, and an exposure
+// change is only a scale.
 //
 // Departure from the thesis: it fits shading on frame 1 alone and then
 // follows one shadow; here every frame is scored over the whole sky and the
@@ -146,8 +147,6 @@ class SkyEvidence {
   int num_samples() const;
   // Sample pixels (OpenCV), n x 2.
   std::vector<Eigen::Vector2f> sample_pixels() const;
-  // Samples lit from direction d (0/1 per sample), for tests and plots.
-  std::vector<uint8_t> LitFrom(int direction) const;
   double build_seconds() const;
 
   // The reference level of every sample from frames spread over the clip
