@@ -14,6 +14,7 @@
 #include "sunlapse/tracking/shadow_tracker.h"
 #include "sunlapse/tracking/thesis_tracker.h"
 #include "sunlapse/tracking/unmodelled_shadows.h"
+#include "sunlapse/video/frame_stream.h"
 #include "sunlapse/video/video_reader.h"
 
 namespace sunlapse::python {
@@ -24,6 +25,20 @@ py::array_t<uint8_t> MatToArray(const cv::Mat& m) {
   py::array_t<uint8_t> out({c.rows, c.cols, c.channels()});
   std::memcpy(out.mutable_data(), c.data, c.total() * c.elemSize());
   return out;
+}
+
+// A numpy array owning `m` (no copy): the Mat's buffer lives as long as the
+// array.
+py::array MatAsArray(cv::Mat m) {
+  if (!m.isContinuous()) m = m.clone();
+  auto* held = new cv::Mat(std::move(m));
+  py::capsule owner(held, [](void* p) { delete static_cast<cv::Mat*>(p); });
+  std::vector<py::ssize_t> shape{held->rows, held->cols};
+  if (held->channels() > 1) shape.push_back(held->channels());
+  if (held->depth() == CV_32F)
+    return py::array_t<float>(shape, reinterpret_cast<float*>(held->data),
+                              owner);
+  return py::array_t<uint8_t>(shape, held->data, owner);
 }
 
 // A progress callable from Python: (fraction) -> bool|None; None = go on.
@@ -297,6 +312,56 @@ void BindEstimate(py::module_& m) {
            py::call_guard<py::gil_scoped_release>())
       .def("__iter__", [](py::object self) { return self; })
       .def("__next__", [](py::object self) { return self.attr("read")(); });
+
+  py::enum_<StreamedFrame::Status>(m, "StreamedFrameStatus")
+      .value("ok", StreamedFrame::Status::kOk)
+      .value("unusable", StreamedFrame::Status::kUnusable)
+      .value("past_end", StreamedFrame::Status::kPastEnd);
+  py::class_<StreamedFrame>(m, "StreamedFrame", "One frame of a FrameStream.")
+      .def_readonly("index", &StreamedFrame::index)
+      .def_readonly("status", &StreamedFrame::status)
+      .def_readonly("report", &StreamedFrame::report)
+      .def_readonly("message", &StreamedFrame::message)
+      .def_property_readonly("gray",
+                             [](const StreamedFrame& f) -> py::object {
+                               if (f.gray.empty()) return py::none();
+                               return MatAsArray(f.gray);
+                             })
+      .def_property_readonly("bgr", [](const StreamedFrame& f) -> py::object {
+        if (f.bgr.empty()) return py::none();
+        return MatAsArray(f.bgr);
+      });
+  OptionsClass<FrameStreamOptions>(m, "FrameStreamOptions",
+                                   "Options of FrameStream (frame_stream.h).")
+      .field("queue_frames", &FrameStreamOptions::queue_frames,
+             "decoded frames waiting at most")
+      .field("gamma", &FrameStreamOptions::gamma, "linear gray is value^gamma")
+      .field("keep_bgr", &FrameStreamOptions::keep_bgr,
+             "also hand out the uint8 BGR frame")
+      .field("near", &FrameStreamOptions::near,
+             "each frame the cheapest to reach at or before the one asked");
+  py::class_<FrameStream>(
+      m, "FrameStream",
+      "Frames decoded ahead on a thread of their own, as linear gray, in the "
+      "order asked (0-based clip indices). Iterate for StreamedFrame.")
+      .def(py::init<const std::string&, std::vector<int>,
+                    const FrameStreamOptions&>(),
+           py::arg("path"), py::arg("indices"),
+           py::arg("options") = FrameStreamOptions())
+      .def_property_readonly("width", &FrameStream::width)
+      .def_property_readonly("height", &FrameStream::height)
+      .def_property_readonly("wait_seconds", &FrameStream::wait_seconds)
+      .def("__iter__", [](py::object self) { return self; })
+      .def("__next__", [](FrameStream& s) {
+        StreamedFrame f;
+        bool more;
+        {
+          py::gil_scoped_release release;
+          more = s.Next(&f);
+        }
+        if (!more) throw py::stop_iteration();
+        return f;
+      });
 
   m.def(
       "detect_unmodelled_shadows",

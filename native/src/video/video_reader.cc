@@ -480,6 +480,36 @@ bool VideoReader::Seek(int index) {
   return true;
 }
 
+int VideoReader::SeekNear(int index) {
+  if (index < 0 || (num_frames_ > 0 && index >= num_frames_)) return -1;
+  if (is_sequence_ || index == position_ ||
+      (index > position_ && index <= position_ + 50)) {
+    return Seek(index) ? index : -1;
+  }
+  // The key frame at or before the target costs one decode; frames after it
+  // would cost one each.
+  Movie& mv = *movie_;
+  const AVStream* st = mv.decoder.stream();
+  const double ticks = static_cast<double>(mv.first_pts) +
+                       index * mv.frame_seconds / av_q2d(st->time_base);
+  const int64_t target = std::isfinite(ticks) && std::fabs(ticks) < 9e18
+                             ? std::llround(ticks)
+                             : mv.first_pts;
+  mv.pending = false;
+  if (mv.decoder.SeekTo(target)) {
+    int err;
+    while ((err = mv.decoder.Next()) < 0 && err != AVERROR_EOF) {
+    }
+    const int64_t at = err == 0 ? mv.IndexOfFrame() : -1;
+    if (at >= 0 && at <= index) {
+      mv.pending = true;
+      position_ = static_cast<int>(at);
+      return position_;
+    }
+  }
+  return Seek(index) ? index : -1;
+}
+
 cv::Mat ToLinearGray(const cv::Mat& image, double gamma) {
   if (image.empty()) return {};
   cv::Mat gray;
@@ -491,9 +521,16 @@ cv::Mat ToLinearGray(const cv::Mat& image, double gamma) {
     gray = image;
   }
   cv::Mat out;
-  const double scale = gray.depth() == CV_8U    ? 1.0 / 255.0
-                       : gray.depth() == CV_16U ? 1.0 / 65535.0
-                                                : 1.0;
+  if (gray.depth() == CV_8U) {
+    // A table of the 256 values: the per-pixel pow() cost more than decoding
+    // a 1080p frame.
+    cv::Mat table(1, 256, CV_32F);
+    for (int v = 0; v < 256; ++v)
+      table.at<float>(0, v) = static_cast<float>(std::pow(v / 255.0, gamma));
+    cv::LUT(gray, table, out);
+    return out;
+  }
+  const double scale = gray.depth() == CV_16U ? 1.0 / 65535.0 : 1.0;
   gray.convertTo(out, CV_32F, scale);
   if (gamma != 1.0) cv::pow(out, gamma, out);
   return out;

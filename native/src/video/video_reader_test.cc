@@ -18,11 +18,22 @@ namespace sunlapse {
 namespace {
 namespace fs = std::filesystem;
 
+// Folders made by the tests, removed when the test program ends.
+struct TempDirs {
+  std::vector<fs::path> made;
+  ~TempDirs() {
+    std::error_code ignored;
+    for (const fs::path& d : made) fs::remove_all(d, ignored);
+  }
+};
+TempDirs temp_dirs;
+
 fs::path TempDir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() /
                      ("sunlapse_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
+  temp_dirs.made.push_back(d);
   return d;
 }
 
@@ -158,6 +169,28 @@ TEST(VideoReader, SeeksFarForwardAndBackToTheExactFrame) {
 bool Ffmpeg(const std::string& args) {
   return std::system(
              ("ffmpeg -v error -y " + args + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
+  const fs::path d = TempDir("near");
+  const std::string src = NumberedMovie(d, 120);
+  const std::string path = (d / "gop30.mp4").string();
+  if (!Ffmpeg("-i " + src +
+              " -c:v libx264 -g 30 -keyint_min 30 -sc_threshold 0 " + path)) {
+    GTEST_SKIP() << "ffmpeg with libx264 is not available";
+  }
+  VideoReader r(path);
+  cv::Mat f;
+  for (auto [target, key] : {std::pair{100, 90}, {10, 0}, {65, 60}}) {
+    const int at = r.SeekNear(target);
+    EXPECT_EQ(at, key) << target;
+    ASSERT_TRUE(r.Read(&f)) << target;
+    EXPECT_EQ(r.last_frame().index, at);
+    EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * at, 4) << target;
+  }
+  // Close ahead it decodes forward to the exact frame.
+  EXPECT_EQ(r.SeekNear(70), 70);
+  EXPECT_EQ(r.SeekNear(120), -1);
 }
 
 TEST(VideoReader, AResolutionChangeMidStreamIsReportedPerFrame) {

@@ -70,6 +70,10 @@ class VideoReader {
   const FrameReport& last_frame() const { return last_; }
   // Moves to 0-based frame `index`; false if out of range.
   bool Seek(int index);
+  // Moves to a frame at or shortly before `index` that is cheap to reach (a
+  // movie's key frame, unless `index` is close ahead); returns its index, or
+  // -1 if out of range. For frames that need not be exact (spread samples).
+  int SeekNear(int index);
 
  private:
   struct Movie;

@@ -1,0 +1,70 @@
+// Frames decoded ahead on a thread of their own, so that decoding a clip
+// overlaps with estimating on it, and converted there to what the estimate
+// reads (linear gray). The queue between the two is bounded: memory holds a
+// few frames whatever the clip's length.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "sunlapse/video/video_reader.h"
+
+namespace sunlapse {
+
+struct FrameStreamOptions {
+  // Decoded frames waiting for the consumer at most.
+  int queue_frames = 3;
+  // Linear gray is value^gamma (ToLinearGray).
+  double gamma = 2.2;
+  // Also hand out the 8-bit BGR frame (for a colour background).
+  bool keep_bgr = false;
+  // Frames need not be exact: each is the cheapest to reach at or shortly
+  // before the index asked (VideoReader::SeekNear); `index` says which.
+  bool near = false;
+  void Check() const;
+};
+
+struct StreamedFrame {
+  enum class Status {
+    kOk,        // gray (and bgr when asked) hold the frame
+    kUnusable,  // the reader could not give it (report says why)
+    kPastEnd,   // the clip has no such frame
+  };
+  int index = -1;  // 0-based clip index (as asked, unless near)
+  Status status = Status::kPastEnd;
+  FrameReport report;   // the reader's own report of the frame
+  std::string message;  // why not, for kUnusable and kPastEnd
+  cv::Mat gray;         // CV_32F linear gray, kOk only
+  cv::Mat bgr;          // CV_8UC3, kOk with keep_bgr only
+};
+
+class FrameStream {
+ public:
+  // Reads `indices` (0-based clip frames, in that order; consecutive ones
+  // without seeking) on a thread of its own. Throws std::invalid_argument
+  // like VideoReader, or for bad options.
+  FrameStream(const std::string& path, std::vector<int> indices,
+              const FrameStreamOptions& options);
+  // Stops the thread (the frame being decoded is finished first).
+  ~FrameStream();
+  FrameStream(const FrameStream&) = delete;
+  FrameStream& operator=(const FrameStream&) = delete;
+
+  // The next frame in the order asked; false after the last. Blocks until it
+  // is decoded.
+  bool Next(StreamedFrame* frame);
+  // Seconds Next() spent waiting for the decoder so far (the consumer idle:
+  // decoding is the bottleneck when this is most of the run).
+  double wait_seconds() const;
+  int width() const;
+  int height() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sunlapse

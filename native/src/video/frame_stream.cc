@@ -1,0 +1,132 @@
+#include "sunlapse/video/frame_stream.h"
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
+namespace sunlapse {
+
+void FrameStreamOptions::Check() const {
+  if (queue_frames < 1 || queue_frames > 64)
+    throw std::invalid_argument("queue_frames must be in [1, 64]");
+  if (!(gamma > 0.0 && gamma <= 10.0))
+    throw std::invalid_argument("gamma must be in (0, 10]");
+}
+
+struct FrameStream::Impl {
+  FrameStreamOptions options;
+  std::vector<int> indices;
+  VideoReader reader;
+  std::mutex mutex;
+  std::condition_variable ready, space;
+  std::deque<StreamedFrame> queue;
+  size_t handed = 0;  // frames given to the consumer
+  bool stop = false;
+  double wait_seconds = 0.0;
+  std::thread thread;
+
+  Impl(const std::string& path, std::vector<int> idx,
+       const FrameStreamOptions& o)
+      : options(o), indices(std::move(idx)), reader(path) {}
+
+  StreamedFrame Decode(int index) {
+    StreamedFrame f;
+    f.index = index;
+    if (options.near) {
+      f.index = reader.SeekNear(index);
+      if (f.index < 0) {
+        f.message = "the clip has no frame " + std::to_string(index + 1);
+        f.index = index;
+        return f;
+      }
+    } else if (index < 0 ||
+               (reader.position() != index && !reader.Seek(index))) {
+      f.message = "the clip has no frame " + std::to_string(index + 1);
+      return f;
+    }
+    cv::Mat bgr;
+    if (!reader.Read(&bgr)) {
+      f.message = "the clip ended before frame " + std::to_string(f.index + 1);
+      return f;
+    }
+    f.report = reader.last_frame();
+    if (bgr.empty()) {
+      f.status = StreamedFrame::Status::kUnusable;
+      f.message =
+          f.report.message.empty() ? "frame not decodable" : f.report.message;
+      return f;
+    }
+    f.status = StreamedFrame::Status::kOk;
+    f.gray = ToLinearGray(bgr, options.gamma);
+    if (options.keep_bgr) f.bgr = std::move(bgr);
+    return f;
+  }
+
+  void Run() {
+    for (int index : indices) {
+      StreamedFrame f;
+      try {
+        f = Decode(index);
+      } catch (const std::exception& e) {  // e.g. out of memory on one frame
+        f = StreamedFrame();
+        f.index = index;
+        f.status = StreamedFrame::Status::kUnusable;
+        f.message = e.what();
+      }
+      std::unique_lock<std::mutex> lock(mutex);
+      space.wait(lock, [&] {
+        return stop || queue.size() < static_cast<size_t>(options.queue_frames);
+      });
+      if (stop) return;
+      queue.push_back(std::move(f));
+      ready.notify_one();
+    }
+  }
+};
+
+FrameStream::FrameStream(const std::string& path, std::vector<int> indices,
+                         const FrameStreamOptions& options) {
+  options.Check();
+  impl_ = std::make_unique<Impl>(path, std::move(indices), options);
+  impl_->thread = std::thread([this] { impl_->Run(); });
+}
+
+FrameStream::~FrameStream() {
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->stop = true;
+  }
+  impl_->space.notify_all();
+  impl_->thread.join();
+}
+
+bool FrameStream::Next(StreamedFrame* frame) {
+  Impl& s = *impl_;
+  std::unique_lock<std::mutex> lock(s.mutex);
+  if (s.handed >= s.indices.size()) return false;
+  const auto t0 = std::chrono::steady_clock::now();
+  s.ready.wait(lock, [&] { return !s.queue.empty(); });
+  s.wait_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+          .count();
+  *frame = std::move(s.queue.front());
+  s.queue.pop_front();
+  ++s.handed;
+  s.space.notify_one();
+  return true;
+}
+
+double FrameStream::wait_seconds() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->wait_seconds;
+}
+
+int FrameStream::width() const { return impl_->reader.width(); }
+int FrameStream::height() const { return impl_->reader.height(); }
+
+}  // namespace sunlapse

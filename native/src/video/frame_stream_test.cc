@@ -1,0 +1,112 @@
+#include "sunlapse/video/frame_stream.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+namespace sunlapse {
+namespace {
+namespace fs = std::filesystem;
+
+// A numbered PNG sequence in a folder of its own, removed afterwards.
+class Sequence {
+ public:
+  Sequence(const std::string& name, int count) {
+    dir_ = fs::temp_directory_path() /
+           ("sunlapse_stream_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    for (int i = 0; i < count; ++i)
+      cv::imwrite(Path(i), cv::Mat(12, 16, CV_8UC3, cv::Scalar(10 * i, 0, 0)));
+  }
+  ~Sequence() { fs::remove_all(dir_); }
+  std::string Path(int i) const {
+    char name[32];
+    std::snprintf(name, sizeof(name), "f_%03d.png", i + 1);
+    return (dir_ / name).string();
+  }
+
+ private:
+  fs::path dir_;
+};
+
+// Blue 10*i -> gray 0.114*10*i (OpenCV's BGR2GRAY, rounded) -> linear.
+float Expected(int i, double gamma) {
+  const cv::Mat px(1, 1, CV_8UC3, cv::Scalar(10 * i, 0, 0));
+  return ToLinearGray(px, gamma).at<float>(0, 0);
+}
+
+TEST(FrameStream, HandsOutTheFramesAskedInTheirOrderAsLinearGray) {
+  const Sequence seq("order", 6);
+  FrameStreamOptions o;
+  o.queue_frames = 1;
+  o.gamma = 2.2;
+  FrameStream s(seq.Path(0), {4, 5, 0, 1, 2}, o);
+  EXPECT_EQ(s.width(), 16);
+  std::vector<int> got;
+  StreamedFrame f;
+  while (s.Next(&f)) {
+    ASSERT_EQ(f.status, StreamedFrame::Status::kOk) << f.message;
+    ASSERT_EQ(f.gray.type(), CV_32F);
+    EXPECT_TRUE(f.bgr.empty());
+    EXPECT_NEAR(f.gray.at<float>(3, 3), Expected(f.index, 2.2), 1e-6);
+    got.push_back(f.index);
+  }
+  EXPECT_EQ(got, (std::vector<int>{4, 5, 0, 1, 2}));
+  EXPECT_FALSE(s.Next(&f));
+}
+
+TEST(FrameStream, SaysWhyAFrameIsMissingAndGoesOn) {
+  const Sequence seq("gaps", 4);
+  std::ofstream(seq.Path(1)) << "not a png";
+  FrameStreamOptions o;
+  o.keep_bgr = true;
+  FrameStream s(seq.Path(0), {0, 1, 2, 9}, o);
+  StreamedFrame f;
+  ASSERT_TRUE(s.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kOk);
+  EXPECT_EQ(f.bgr.type(), CV_8UC3);
+  ASSERT_TRUE(s.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kUnusable);
+  EXPECT_TRUE(f.gray.empty());
+  EXPECT_FALSE(f.message.empty());
+  ASSERT_TRUE(s.Next(&f));
+  EXPECT_EQ(f.index, 2);
+  EXPECT_EQ(f.status, StreamedFrame::Status::kOk);
+  ASSERT_TRUE(s.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kPastEnd);
+  EXPECT_NE(f.message.find("10"), std::string::npos) << f.message;
+  EXPECT_FALSE(s.Next(&f));
+}
+
+TEST(FrameStream, StopsWhenDroppedHalfWay) {
+  const Sequence seq("drop", 8);
+  FrameStreamOptions o;
+  o.queue_frames = 2;
+  {
+    FrameStream s(seq.Path(0), {0, 1, 2, 3, 4, 5, 6, 7}, o);
+    StreamedFrame f;
+    ASSERT_TRUE(s.Next(&f));
+  }  // the decoding thread, blocked on a full queue, is joined here (a
+     // deadlock fails the test by ctest's timeout)
+}
+
+TEST(FrameStream, RefusesBadOptionsAndMissingFiles) {
+  const Sequence seq("bad", 1);
+  FrameStreamOptions o;
+  o.queue_frames = 0;
+  EXPECT_THROW(FrameStream(seq.Path(0), {0}, o), std::invalid_argument);
+  EXPECT_THROW(FrameStream("/nonexistent/clip.mp4", {0}, FrameStreamOptions()),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sunlapse
