@@ -78,6 +78,8 @@ void BindSky(py::module_& m) {
            py::arg("options") = SkyEvidenceOptions(), py::keep_alive<1, 2>(),
            py::keep_alive<1, 3>())
       .def_property_readonly("num_samples", &SkyEvidence::num_samples)
+      .def_property_readonly("band_entries", &SkyEvidence::band_entries,
+                             "band samples looked up per frame")
       .def_property_readonly("num_frames", &SkyEvidence::num_frames)
       .def_property_readonly("build_seconds", &SkyEvidence::build_seconds)
       .def_property_readonly(

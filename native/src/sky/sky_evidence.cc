@@ -119,8 +119,17 @@ struct SkyEvidence::Impl {
   // within band_steps grid steps of a neighbour (same group) of the other
   // state; s when lit, ~s when in shade. Only the band is scored: a shadow
   // is an edge, and a smooth gradient has no contrast across one.
+  // Stored per direction as segments, one per planar group with enough
+  // samples on both sides to be scored (the others never score): the lit
+  // samples band[lit, shade), then the shaded ones band[shade, end). The
+  // counts never change, so a frame only sums its ratios over each side.
+  struct Segment {
+    int32_t group;
+    int64_t lit, shade, end;
+  };
   std::vector<int32_t> band;
-  std::vector<int64_t> band_begin;  // size D + 1
+  std::vector<Segment> segments;
+  std::vector<int64_t> segments_begin;  // size D + 1
   // Right-hand grid neighbour of each sample in the same group (-1: none),
   // for the noise of neighbouring differences.
   std::vector<int32_t> right;
@@ -264,18 +273,36 @@ struct SkyEvidence::Impl {
       }
       for (int i : queue) band_of[d].push_back(lit[i] ? i : ~i);
     });
-    // One array for all directions' bands, with offsets.
-    band_begin.assign(grid.size() + 1, 0);
+    // One array for all directions' bands: per direction, per group with
+    // enough samples on both sides, its lit samples then its shaded ones.
+    segments_begin.assign(grid.size() + 1, 0);
+    std::vector<std::vector<int32_t>> lit_of(num_groups), shade_of(num_groups);
     for (int d = 0; d < grid.size(); ++d) {
-      band_begin[d + 1] =
-          band_begin[d] + static_cast<int64_t>(band_of[d].size());
-    }
-    band.resize(band_begin.back());
-    for (int d = 0; d < grid.size(); ++d) {
-      std::copy(band_of[d].begin(), band_of[d].end(),
-                band.begin() + band_begin[d]);
+      for (auto& v : lit_of) v.clear();
+      for (auto& v : shade_of) v.clear();
+      for (int32_t e : band_of[d]) {
+        if (e >= 0) {
+          lit_of[group[e]].push_back(e);
+        } else {
+          shade_of[group[~e]].push_back(~e);
+        }
+      }
       std::vector<int32_t>().swap(band_of[d]);
+      for (int g = 0; g < num_groups; ++g) {
+        if (static_cast<int>(lit_of[g].size()) < o.min_side_samples ||
+            static_cast<int>(shade_of[g].size()) < o.min_side_samples)
+          continue;
+        Segment seg{g, static_cast<int64_t>(band.size()), 0, 0};
+        band.insert(band.end(), lit_of[g].begin(), lit_of[g].end());
+        seg.shade = static_cast<int64_t>(band.size());
+        band.insert(band.end(), shade_of[g].begin(), shade_of[g].end());
+        seg.end = static_cast<int64_t>(band.size());
+        segments.push_back(seg);
+      }
+      segments_begin[d + 1] = static_cast<int64_t>(segments.size());
     }
+    band.shrink_to_fit();
+    segments.shrink_to_fit();
     build_seconds = Seconds(t0);
   }
 
@@ -306,6 +333,9 @@ std::vector<Eigen::Vector2f> SkyEvidence::sample_pixels() const {
   return impl_->pixels;
 }
 double SkyEvidence::build_seconds() const { return impl_->build_seconds; }
+int64_t SkyEvidence::band_entries() const {
+  return static_cast<int64_t>(impl_->band.size());
+}
 bool SkyEvidence::has_reference() const { return !impl_->reference.empty(); }
 int SkyEvidence::num_frames() const { return impl_->frames; }
 const std::vector<uint8_t>& SkyEvidence::scores() const {
@@ -453,42 +483,37 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
     const double sigma = 1.4826 * diffs[diffs.size() / 2] / std::sqrt(2.0);
     noise = std::max(1e-6, sigma * sigma);
   }
-  const int min_side = m.o.min_side_samples;
   std::vector<float> rf(r.begin(), r.end());
   std::vector<double> gain(D, 0.0);
-  tbb::parallel_for(0, D, [&](int d) {
-    double buf[4 * 64];
-    std::vector<double> heap;
-    double* acc = buf;
-    if (G > 64) {
-      heap.assign(4 * static_cast<size_t>(G), 0.0);
-      acc = heap.data();
-    } else {
-      std::fill(buf, buf + 4 * G, 0.0);
-    }
-    // acc[4g..4g+3]: lit count, lit sum, shade count, shade sum.
-    const int32_t* idx = m.band.data();
-    for (int64_t i = m.band_begin[d]; i < m.band_begin[d + 1]; ++i) {
-      const int32_t e = idx[i];
-      const bool is_lit = e >= 0;
-      const int32_t smp = is_lit ? e : ~e;
-      double* a = acc + 4 * m.group[smp] + (is_lit ? 0 : 2);
-      a[0] += 1, a[1] += rf[smp];
-    }
-    // Between-sides sum of squares of the band, per group, only where the
-    // predicted shade is darker than the predicted light.
-    double g_sum = 0;
-    for (int g = 0; g < G; ++g) {
-      const double* a = acc + 4 * g;
-      if (a[0] < min_side || a[2] < min_side) continue;
-      const double mean_lit = a[1] / a[0], mean_shade = a[3] / a[2];
-      if (mean_shade >= mean_lit) continue;
-      const double diff = mean_lit - mean_shade;
-      g_sum += a[0] * a[2] / (a[0] + a[2]) * diff * diff;
-    }
-    gain[d] = g_sum;
-    explained[d] = static_cast<float>(g_sum / total);
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, D, 64),
+      [&](const tbb::blocked_range<int>& range) {
+        const int32_t* idx = m.band.data();
+        const float* ratio = rf.data();
+        for (int d = range.begin(); d < range.end(); ++d) {
+          // Between-sides sum of squares of the band, per group, only where the
+          // predicted shade is darker than the predicted light.
+          double g_sum = 0;
+          for (int64_t k = m.segments_begin[d]; k < m.segments_begin[d + 1];
+               ++k) {
+            const Impl::Segment& seg = m.segments[k];
+            float lit_sum = 0.f, shade_sum = 0.f;
+            for (int64_t i = seg.lit; i < seg.shade; ++i)
+              lit_sum += ratio[idx[i]];
+            for (int64_t i = seg.shade; i < seg.end; ++i)
+              shade_sum += ratio[idx[i]];
+            const double n_lit = static_cast<double>(seg.shade - seg.lit);
+            const double n_shade = static_cast<double>(seg.end - seg.shade);
+            const double mean_lit = lit_sum / n_lit,
+                         mean_shade = shade_sum / n_shade;
+            if (mean_shade >= mean_lit) continue;
+            const double diff = mean_lit - mean_shade;
+            g_sum += n_lit * n_shade / (n_lit + n_shade) * diff * diff;
+          }
+          gain[d] = g_sum;
+          explained[d] = static_cast<float>(g_sum / total);
+        }
+      });
   const int best = static_cast<int>(std::max_element(gain.begin(), gain.end()) -
                                     gain.begin());
   out.best_direction = best;

@@ -148,6 +148,9 @@ class SkyEvidence {
   // Sample pixels (OpenCV), n x 2.
   std::vector<Eigen::Vector2f> sample_pixels() const;
   double build_seconds() const;
+  // Band samples looked up per frame, all directions together (the
+  // per-frame cost).
+  int64_t band_entries() const;
 
   // The reference level of every sample from frames spread over the clip
   // (CV_32F linear gray, the camera's size; empty Mats are skipped). Needs
