@@ -180,6 +180,29 @@ TEST(SunPath, ALoopedClipJumpsOnceAndStaysRightOnBothSides) {
   EXPECT_TRUE(path.jump_before[n]);
 }
 
+// Longer than the solver's blocks of frames (it keeps its forward costs only
+// at block starts): jumps on a block's first frame and inside blocks are
+// found alike, and every frame stays right.
+TEST(SunPath, ALongClipLoopedFiveTimesJumpsAtEveryLoop) {
+  const int n = 32, loops = 5;
+  Clip clip(n);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(Spread(clip.frames, 8));
+  std::vector<Eigen::Vector3d> truth;
+  for (int loop = 0; loop < loops; ++loop) {
+    for (int f = 0; f < n; ++f)
+      ev.AddFrame(clip.frames[f]), truth.push_back(clip.truth[f]);
+  }
+  const SunPathResult path = SolveSunPath(ev, {}, {}, SunPathOptions());
+  ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
+  for (int t = 0; t < n * loops; ++t) {
+    EXPECT_LT(PathError(ev, path, truth, t), kPathToleranceDeg)
+        << "frame " << t;
+    EXPECT_EQ(path.jump_before[t] != 0, t > 0 && t % n == 0) << "frame " << t;
+    EXPECT_GT(path.path_margin[t], 0.f) << "frame " << t;
+  }
+}
+
 TEST(SunPath, KnownTimesBoundTheStepAndSegmentsRestart) {
   const int n = 16;
   Clip clip(n);

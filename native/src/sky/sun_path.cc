@@ -126,30 +126,29 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   };
 
   // Forward: alpha[t][d], the best path's cost over frames 0..t ending at d.
-  std::vector<float> alpha(static_cast<size_t>(T) * D);
+  // Memory stays flat in the clip's length: alpha is kept only every
+  // kBlock frames (checkpoints); the backtrack and the backward pass then
+  // run block by block from the end, each block's alpha and back-pointers
+  // computed again from its checkpoint (one more forward pass in all).
+  constexpr int kBlock = 64;
+  const int blocks = (T + kBlock - 1) / kBlock;
+  std::vector<double> checkpoint(static_cast<size_t>(blocks) * D);
   std::vector<double> cost(D), next(D);
-  std::vector<int> back(static_cast<size_t>(T) * D, -1);
-  std::vector<uint8_t> jumped(static_cast<size_t>(T) * D, 0);
   for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
-  std::copy(cost.begin(), cost.end(), alpha.begin());
-  for (int t = 1; t < T; ++t) {
-    relax(cost, t, &next, &back[static_cast<size_t>(t) * D],
-          &jumped[static_cast<size_t>(t) * D]);
-    for (int d = 0; d < D; ++d) next[d] += o.evidence_weight * cost_of(t, d);
-    std::swap(cost, next);
-    std::copy(cost.begin(), cost.end(),
-              alpha.begin() + static_cast<size_t>(t) * D);
-  }
-  int d = static_cast<int>(std::min_element(cost.begin(), cost.end()) -
-                           cost.begin());
-  out.cost = cost[d];
-  for (int t = T - 1; t >= 0; --t) {
-    out.direction[t] = d;
+  for (int t = 0; t < T; ++t) {
     if (t > 0) {
-      out.jump_before[t] = jumped[static_cast<size_t>(t) * D + d];
-      d = back[static_cast<size_t>(t) * D + d];
+      relax(cost, t, &next, nullptr, nullptr);
+      for (int d = 0; d < D; ++d) next[d] += o.evidence_weight * cost_of(t, d);
+      std::swap(cost, next);
+    }
+    if (t % kBlock == 0) {
+      std::copy(cost.begin(), cost.end(),
+                checkpoint.begin() + static_cast<size_t>(t / kBlock) * D);
     }
   }
+  int d_end = static_cast<int>(std::min_element(cost.begin(), cost.end()) -
+                               cost.begin());
+  out.cost = cost[d_end];
   // Backward: beta[d] at frame t, the best cost of frames t+1..T-1 from d;
   // alpha + beta is the best whole path through (t, d). The path's own
   // margin at t: how much more the best path through a far direction costs.
@@ -158,23 +157,57 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       std::max(o.rival_exclusion_deg, 2.5 * grid.spacing_deg());
   const double cos_x = std::cos(exclusion * kDeg);
   std::vector<double> beta(D, 0.0), ahead(D), beta_next(D);
-  for (int t = T - 1; t >= 0; --t) {
-    if (t < T - 1) {
-      for (int d = 0; d < D; ++d)
-        ahead[d] = beta[d] + o.evidence_weight * cost_of(t + 1, d);
-      relax(ahead, t + 1, &beta_next, nullptr, nullptr);
-      std::swap(beta, beta_next);
+  std::vector<float> alpha(static_cast<size_t>(kBlock) * D);
+  std::vector<int> back(static_cast<size_t>(kBlock) * D, -1);
+  std::vector<uint8_t> jumped(static_cast<size_t>(kBlock) * D, 0);
+  int d = d_end;
+  for (int b = blocks - 1; b >= 0; --b) {
+    const int t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
+    // The block's alpha and back-pointers again, from its checkpoint.
+    for (int dd = 0; dd < D; ++dd)
+      cost[dd] = checkpoint[static_cast<size_t>(b) * D + dd];
+    std::copy(cost.begin(), cost.end(), alpha.begin());
+    for (int t = t0 + 1; t < t1; ++t) {
+      const size_t row = static_cast<size_t>(t - t0) * D;
+      relax(cost, t, &next, &back[row], &jumped[row]);
+      for (int dd = 0; dd < D; ++dd)
+        next[dd] += o.evidence_weight * cost_of(t, dd);
+      std::swap(cost, next);
+      std::copy(cost.begin(), cost.end(), alpha.begin() + row);
     }
-    const int c = out.direction[t];
-    const float* alpha_t = &alpha[static_cast<size_t>(t) * D];
-    double path_rival = kInf;
-    for (int k = 0; k < D; ++k) {
-      if (grid.direction(k).dot(grid.direction(c)) < cos_x) {
-        path_rival = std::min(path_rival, alpha_t[k] + beta[k]);
+    // Into the next block's first frame: its back-pointers come from this
+    // block's last alpha (now in `cost`).
+    if (t1 < T) {
+      std::vector<int> back_row(D);
+      std::vector<uint8_t> jumped_row(D);
+      relax(cost, t1, &next, back_row.data(), jumped_row.data());
+      out.jump_before[t1] = jumped_row[d];
+      d = back_row[d];
+    }
+    for (int t = t1 - 1; t >= t0; --t) {
+      if (t < T - 1) {
+        for (int dd = 0; dd < D; ++dd)
+          ahead[dd] = beta[dd] + o.evidence_weight * cost_of(t + 1, dd);
+        relax(ahead, t + 1, &beta_next, nullptr, nullptr);
+        std::swap(beta, beta_next);
       }
+      out.direction[t] = d;
+      const size_t row = static_cast<size_t>(t - t0) * D;
+      if (t > t0) {
+        out.jump_before[t] = jumped[row + d];
+        d = back[row + d];
+      }
+      const int c = out.direction[t];
+      const float* alpha_t = &alpha[row];
+      double path_rival = kInf;
+      for (int k = 0; k < D; ++k) {
+        if (grid.direction(k).dot(grid.direction(c)) < cos_x) {
+          path_rival = std::min(path_rival, alpha_t[k] + beta[k]);
+        }
+      }
+      out.path_margin[t] = static_cast<float>(
+          std::min(1e6, path_rival - (alpha_t[c] + beta[c])));
     }
-    out.path_margin[t] =
-        static_cast<float>(std::min(1e6, path_rival - (alpha_t[c] + beta[c])));
   }
   // Per frame: the frame's own support for the chosen direction: how much
   // more the best direction well away from it costs (log-likelihood).
