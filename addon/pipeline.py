@@ -318,8 +318,8 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
 
     t0 = time.perf_counter()
     if options.method == "default" and options.initial_sun is None:
-        return _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
-                               progress, t0)
+        return _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, options,
+                               track, progress, t0)
     return _run_tracked(scene, camera, source, frames, visit, times, options, track, progress, t0)
 
 
@@ -469,12 +469,21 @@ def _smooth_segments(numbers, raws, segments, mode, options, times):
     return zs, azs
 
 
-def _run_whole_clip(scene, camera, source, frames, visit, times, options, track, progress, t0):
+def _wrong_size(image, camera) -> Optional[str]:
+    if image.shape[0] != camera.height or image.shape[1] != camera.width:
+        return (f"frame is {image.shape[1]}x{image.shape[0]}, not the camera's "
+                f"{camera.width}x{camera.height}: not the scene's footage")
+    return None
+
+
+def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, options, track,
+                    progress, t0):
     """The default method: the Sun over the whole clip at once
     (estimate/whole_clip.py), then smoothing per segment."""
     native = native_loader.require()
     north = options.north_offset_deg
-    sample_at = set(acquire.spread(frames))
+    # The frames spread over the clip for the reference levels are kept in
+    # colour for the clip's shadow-free background.
     samples = {}
 
     def read_gray(f):
@@ -484,12 +493,38 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
             return "the clip ended before this frame"
         if bgr is None:
             return source.why_not()
-        if bgr.shape[0] != camera.height or bgr.shape[1] != camera.width:
-            return (f"frame is {bgr.shape[1]}x{bgr.shape[0]}, not the camera's "
-                    f"{camera.width}x{camera.height}: not the scene's footage")
-        if f in sample_at:
-            samples[f] = bgr
-        return native.to_linear_gray(bgr, GAMMA[options.method])
+        return _wrong_size(bgr, camera) or native.to_linear_gray(bgr, GAMMA[options.method])
+
+    def stream(fs, near):
+        """The frames in order, decoded ahead on a native thread (started
+        now, before the first is asked for)."""
+        try:
+            frame_stream = native.FrameStream(
+                clip_path, [f - source.start for f in fs],
+                native.FrameStreamOptions(gamma=GAMMA[options.method], near=near,
+                                          keep_bgr=near))
+        except ValueError as e:
+            raise PipelineError(f"cannot read the clip: {e}")
+        return streamed(frame_stream, near)
+
+    def streamed(frame_stream, near):
+        start = source.start
+        past_end = native.StreamedFrameStatus.past_end
+        for got in frame_stream:
+            f = got.index + start
+            if got.gray is not None:
+                why = _wrong_size(got.gray, camera)
+                if near and why is None:
+                    samples[f] = got.bgr
+                yield f, why or got.gray
+            elif got.status == past_end:
+                yield f, "the clip ended before this frame"
+            else:
+                yield f, got.message or "frame not decodable"
+        if not near:
+            stream_wait["s"] = frame_stream.wait_seconds
+
+    stream_wait = {"s": 0.0}
 
     seconds = None
     if times is not None:
@@ -499,7 +534,8 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
         result = whole_clip.estimate(
             native, scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
             ignore_top_rows=options.ignore_top_rows,
-            progress=None if progress is None else (lambda x: progress(0.95 * x)))
+            progress=None if progress is None else (lambda x: progress(0.95 * x)),
+            stream=stream)
     except whole_clip.Cancelled:
         raise PipelineError("cancelled")
     track.method["initial"] = track.method["tracking"] = "whole_clip"
@@ -522,14 +558,13 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
                          "seconds": result.timing.get("table_s", 0.0)
                          + result.timing.get("reference_s", 0.0),
                          "message": "the best-supported frame of the whole-clip path"}
-        try:
-            anchor_bgr = source.read(a.frame)
-        except StopIteration:
-            anchor_bgr = None
-        if anchor_bgr is not None:
-            _note_unmodelled_shadows(track, scene, camera, a.frame, anchor_bgr,
-                                     a.sun_in_world,
-                                     list(samples.values()), options)
+        # Unmodelled shadows are looked for on the best-supported frame kept
+        # in colour (no frame is decoded again for the note).
+        kept = [f for f in samples if f in by_frame and by_frame[f].sun_in_world is not None]
+        if kept:
+            f = max(kept, key=lambda f: by_frame[f].confidence)
+            _note_unmodelled_shadows(track, scene, camera, f, samples[f],
+                                     by_frame[f].sun_in_world, list(samples.values()), options)
     elif result.message:
         track.extra["message"] = result.message
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
@@ -538,5 +573,6 @@ def _run_whole_clip(scene, camera, source, frames, visit, times, options, track,
     if result.jumps:
         track.extra["jumps"] = result.jumps
     _finish(native, track, raws, options, times, progress, result.segments)
-    track.extra["timing"] = dict(result.timing, total_s=time.perf_counter() - t0)
+    track.extra["timing"] = dict(result.timing, decode_wait_s=stream_wait["s"],
+                                 total_s=time.perf_counter() - t0)
     return track

@@ -5,13 +5,17 @@ Frames in, raw per-frame Suns out:
 1. a visibility table of the model's visible surfaces over the whole sky
    (native SkyEvidence), with each surface sample's reference level taken
    from frames spread over the clip;
-2. every frame scored against every sky direction (table look-ups);
+2. one pass over the clip, each frame decoded once: every frame scored
+   against every sky direction (table look-ups), and the shadow tracker
+   following the shadows to sub-degree on the same frame, started on the
+   first frame whose own evidence is unmistakable;
 3. the Sun's path chosen globally (native solve_sun_path): segments where
    the capture times jump back, the frame size changes, or the evidence
    demands a jump the times do not explain;
-4. each segment refined to sub-degree by the shadow tracker, searching
-   around the path's direction on every frame (no anchor frame, no
-   re-acquisition heuristics).
+4. each segment checked against the path: a frame whose tracked Sun is
+   further from the path than the tracker can be off is read again and
+   refined around the path's direction (no anchor frame, no re-acquisition
+   heuristics). Only those frames are decoded twice.
 
 Smoothing and the track file are the caller's (pipeline.py); smoothing never
 crosses a segment boundary and never reaches past a segment's last measured
@@ -23,13 +27,18 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, List, Optional, Sequence, Union
+from typing import Callable, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
 REFERENCE_FRAMES = 24
+# On a short clip the reference frames are a large share of all decoding:
+# those that are frames of the run are kept for the pass (up to this many
+# bytes) instead of being decoded again.
+SHORT_CLIP_FRAMES = 4 * REFERENCE_FRAMES
+REFERENCE_KEEP_BYTES = 256 << 20
 # A refined Sun further than this from the path's direction is not believed
 # (the tracker locked onto something else); the path's own direction is a
 # grid cell that the evidence's ridge along the shadows can leave a few
@@ -40,6 +49,15 @@ REFINE_MAX_DEG = 8.0
 # see sun_path.h; the frame's own evidence and its neighbours'): full at this
 # lead.
 FULL_CONFIDENCE_MARGIN = 12.0
+# On a frame with evidence of its own, a tracked Sun further than this from
+# the path's grid cell (about 1.5 cells) has drifted along its shadows: the
+# frame is refined again around the path's direction, and a result still
+# that far keeps half its confidence.
+AGREE_DEG = 4.0
+# The tracker starts in the pass over the clip on the first frame whose own
+# evidence leads every far direction by this much (log-likelihood units);
+# a wrong start costs only a second reading of the frames it spoilt.
+START_MARGIN = 6.0
 # The Sun's apparent motion bound (deg per hour), and per frame when the
 # frames' times are unknown (sun_path.h's generous bound).
 SUN_DEG_PER_HOUR = 15.5
@@ -90,6 +108,26 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(np.dot(a, b))))
 
 
+def _start(tracker, gray, sun_in_world):
+    """Starts the tracker on a frame under a grid direction: (whether it
+    started, its refined result on that frame or None).
+
+    The tracker takes the ground's albedo from this frame under the Sun it is
+    given: the grid cell's shadows are a little off, so the frame is refined
+    once and the tracker started again from the refined Sun (albedo by shadow
+    edges measured, not guessed)."""
+    if not tracker.initialize(gray, sun_in_world).ok:
+        return False, None
+    r = tracker.track_toward(gray, sun_in_world)
+    if r.ok and _angle_deg(r.sun_in_world, sun_in_world) <= REFINE_MAX_DEG:
+        refined = np.asarray(r.sun_in_world, dtype=float)
+        tracker.initialize(gray, refined)
+        r = tracker.track_toward(gray, refined)
+    if r.ok and _angle_deg(r.sun_in_world, sun_in_world) <= REFINE_MAX_DEG:
+        return True, r
+    return True, None
+
+
 def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     """k positions spread evenly over range(n) (all of them when n <= k)."""
     if n <= k:
@@ -101,15 +139,26 @@ def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
     return read if isinstance(read, np.ndarray) else None
 
 
+Gray = Union[np.ndarray, str, None]
+
+
 def estimate(native, scene, camera, frames: Sequence[int],
-             read_gray: Callable[[int], Union[np.ndarray, str, None]],
+             read_gray: Callable[[int], Gray],
              ground_object_ids: Sequence[int], times_s: Optional[Sequence[float]] = None,
              ignore_top_rows: int = 0,
-             progress: Optional[Callable[[float], object]] = None) -> WholeClipResult:
+             progress: Optional[Callable[[float], object]] = None,
+             stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None
+             ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
     sentence saying why there is none (not decodable, another size, a file
-    missing from a sequence). `times_s`: capture times
+    missing from a sequence). `stream(frames, near)`, when given, yields
+    (frame, the same) for the frames in that order, decoded ahead (the pass
+    over the whole clip); with near=True each frame may be one shortly
+    before the one asked that is cheaper to reach (a movie's key frame: the
+    reference levels need frames spread over the clip, not exact ones).
+    read_gray is then only used for the few frames read again. `times_s`:
+    capture times
     in seconds (None when unknown). `native`: the compiled module (passed in,
     so this controller imports nothing of the add-on's package)."""
     frames = list(frames)
@@ -121,11 +170,24 @@ def estimate(native, scene, camera, frames: Sequence[int],
         if progress is not None and progress(fraction) is False:
             raise Cancelled()
 
+    if stream is None:
+        def stream(fs, near=False):
+            return ((f, read_gray(f)) for f in fs)
+    assert stream is not None
+    # The reference frames are decoded ahead while the table is cast.
+    reference_frames = stream([frames[i] for i in spread(n)], True)
     opts = native.SkyEvidenceOptions()
     opts.ignore_top_rows = ignore_top_rows
     sky = native.SkyEvidence(scene, camera, opts)
     t_table = time.perf_counter() - t0
-    reference = [_frame(read_gray(frames[i])) for i in spread(n)]
+    reference, kept = [], {}
+    budget = REFERENCE_KEEP_BYTES if n <= SHORT_CLIP_FRAMES else 0
+    wanted = set(frames)
+    for f, image in reference_frames:
+        gray = _frame(image)
+        reference.append(gray)
+        if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
+            kept[f], budget = gray, budget - gray.nbytes
     used = sky.set_reference(reference)
     del reference
     t_setup = time.perf_counter() - t0
@@ -134,23 +196,70 @@ def estimate(native, scene, camera, frames: Sequence[int],
         result.message = "no frame of the clip could be read"
         return result
 
-    # Pass 1: evidence for every frame.
-    status, reasons = [], []
-    ok = native.FrameEvidenceStatus.OK
-    for k, f in enumerate(frames):
-        tick(0.5 * k / n)
-        got = read_gray(f)
-        e = sky.add_frame(_frame(got))
-        status.append(e.status)
-        reasons.append(got if isinstance(got, str) else (e.message or None))
-    t_evidence = time.perf_counter() - t0
-
     # Segments the caller knows of: capture times going back.
     starts = [0] * n
     if times_s is not None:
         for k in range(1, n):
             if times_s[k] < times_s[k - 1]:
                 starts[k] = 1
+    reads = {"count": len(spread(n))}
+
+    def read_again(k):
+        reads["count"] += 1
+        return _frame(read_gray(frames[k]))
+
+    # The pass over the clip: evidence for every frame, and the tracker
+    # following the shadows on the same frames (checked against the path
+    # afterwards).
+    status, reasons = [], []
+    ok = native.FrameEvidenceStatus.OK
+    usable_status = (ok, native.FrameEvidenceStatus.NO_SHADOWS)
+    directions = sky.directions
+    tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
+                                   ignore_top_rows=ignore_top_rows)
+    tracked: List[object] = [None] * n
+    clock = {"tracking": 0.0, "done": 0}
+    following = False
+    started = {"any": False}
+    decoded = iter(stream([f for f in frames if f not in kept], False))
+    got: Gray
+    for k, f in enumerate(frames):
+        if f in kept:
+            got = kept.pop(f)
+        else:
+            g, got = next(decoded, (-1, None))
+            if g != f:
+                raise ValueError(f"stream gave frame {g} where {f} was asked")
+            reads["count"] += 1
+        tick(0.8 * k / n)
+        gray = _frame(got)
+        e = sky.add_frame(gray)
+        status.append(e.status)
+        reasons.append(got if isinstance(got, str) else (e.message or None))
+        if starts[k]:
+            following = False
+        if gray is None or e.status not in usable_status:
+            continue
+        sure = (e.status == ok and e.best_direction >= 0 and e.margin >= START_MARGIN)
+        if not following:
+            if sure:
+                following, tracked[k] = _start(tracker, gray, directions[e.best_direction])
+                started["any"] = started["any"] or following
+            continue
+        # A frame where the tracker loses the shadow (a cloud, a person)
+        # does not stop it: it widens its own search on the next ones.
+        r = tracker.track(gray)
+        clock["tracking"] += r.seconds
+        if sure and (not r.ok or _angle_deg(r.sun_in_world,
+                                            directions[e.best_direction]) > REFINE_MAX_DEG):
+            # The frame's own evidence is unmistakable and elsewhere: the
+            # tracker has drifted; steer it back (the path checks again).
+            r = tracker.track_toward(gray, directions[e.best_direction])
+            clock["tracking"] += r.seconds
+        if r.ok:
+            tracked[k] = r
+    t_evidence = time.perf_counter() - t0
+
     path_options = native.SunPathOptions()
     if times_s is not None:
         # Known times say where the clip is continuous: the Sun cannot jump
@@ -163,7 +272,6 @@ def estimate(native, scene, camera, frames: Sequence[int],
                          for k, f in enumerate(frames)]
         result.message = path["message"]
         return result
-    directions = sky.directions
     spacing = sky.spacing_deg
     bounds = [0]
     for k in range(1, n):
@@ -183,12 +291,14 @@ def estimate(native, scene, camera, frames: Sequence[int],
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None
 
-    # Pass 2: refine each segment with the shadow tracker, forward from its
-    # first measured frame, then back from it to the frames before.
-    tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
-                                   ignore_top_rows=ignore_top_rows)
+    # Each segment against the path, forward from its first measured frame,
+    # then back from it to the frames before. A frame the pass tracked to a
+    # Sun near the path keeps it; the others are read again and refined
+    # around the path's direction, by a tracker started again on the
+    # segment's first measured frame.
     raws: List[RawFrame] = []
-    clock = {"tracking": 0.0, "done": 0}
+    before, after = [0] * n, [0] * n  # nearest measured frames, in a segment's span
+    where = {"run": None, "last": None}  # the tracker's run and its last frame
 
     def motion_deg(k, j):
         """How far the Sun can move between frames k and j (deg)."""
@@ -196,24 +306,60 @@ def estimate(native, scene, camera, frames: Sequence[int],
             return abs(times_s[k] - times_s[j]) / 3600.0 * SUN_DEG_PER_HOUR
         return abs(k - j) * UNTIMED_STEP_DEG
 
-    def refine(k, raw, follow, beyond, anchor):
+    def restart(run, first):
+        """A tracker for the frames read again: the pass's own, or, when it
+        never started there, one started on frame `first` under the path's
+        Sun, once per run (segment, direction)."""
+        if where["run"] == run or started["any"]:
+            where["run"] = run
+            return True
+        gray = read_again(first)
+        ok_start = gray is not None and _start(tracker, gray,
+                                               directions[path["direction"][first]])[0]
+        where["run"], where["last"] = run, first
+        return ok_start
+
+    def between(k, sun_in_world):
+        """Whether a Sun on a frame without evidence of its own, between
+        frames with evidence, is where the Sun can be from both of them: the
+        path carries such frames on a grid cell that lags the Sun, so the
+        tracker's own Sun is checked against the measured frames instead."""
+        for j in (before[k], after[k]):
+            d = directions[path["direction"][j]]
+            if _angle_deg(sun_in_world, d) > REFINE_MAX_DEG + motion_deg(k, j):
+                return False
+        return True
+
+    def refine(k, raw, run, first, beyond, anchor, step):
         """Refines frame k into `raw`; returns whether the tracker holds.
         Beyond the measured frames the path has no evidence of its own: the
         result is checked against the nearest measured frame's Sun, as far
         as the Sun can move from it."""
         clock["done"] += 1
-        tick(0.5 + 0.5 * clock["done"] / n)
+        tick(0.8 + 0.2 * clock["done"] / n)
         d = directions[path["direction"][anchor if beyond else k]]
         limit = REFINE_MAX_DEG + (motion_deg(k, anchor) if beyond else 0.0)
-        gray = _frame(read_gray(frames[k]))
-        refined = None
-        if gray is not None:
+        refined = tracked[k]
+        if refined is not None and not measured[k] and not beyond:
+            if _angle_deg(refined.sun_in_world, d) > limit and not between(
+                    k, refined.sun_in_world):
+                refined = None
+        elif refined is not None and _angle_deg(refined.sun_in_world, d) > (
+                AGREE_DEG if measured[k] else limit):
+            refined = None
+        if refined is None and restart(run, first):
+            gray = read_again(k)
             # The tracker's own prediction (the last refined Suns' motion) is
-            # finer than the path's grid cell; the path's direction is the
-            # check, and the fallback when the tracker has drifted.
-            for attempt in ("own", "path") if follow else ("path",):
+            # finer than the path's grid cell, when it has just followed the
+            # neighbouring frame; the path's direction is the check, and the
+            # fallback when the tracker has drifted.
+            own = where["last"] == k - step
+            for attempt in ("own", "path") if own else ("path",):
+                if gray is None:
+                    break
                 r = tracker.track(gray) if attempt == "own" else tracker.track_toward(gray, d)
                 clock["tracking"] += r.seconds
+                where["last"] = k
                 if r.ok and _angle_deg(r.sun_in_world, d) <= limit:
                     refined = r
                     break
@@ -223,6 +369,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
             raw.refined, raw.tracked, raw.reason = True, refined, None
             if measured[k]:
                 raw.confidence = refined.confidence * support
+                if _angle_deg(refined.sun_in_world, d) > AGREE_DEG:
+                    raw.confidence *= 0.5
             else:
                 raw.confidence = refined.confidence * (
                     FOLLOWED_BEYOND_CONFIDENCE if beyond else FOLLOWED_CONFIDENCE)
@@ -238,7 +386,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         result.segments.append(frames[lo:hi])
         seg = [RawFrame(frames[k], segment=s, measured=bool(measured[k])) for k in range(lo, hi)]
         raws.extend(seg)
-        usable = [status[k] in (ok, native.FrameEvidenceStatus.NO_SHADOWS) for k in range(lo, hi)]
+        usable = [status[k] in usable_status for k in range(lo, hi)]
         for k in range(lo, hi):
             if not usable[k - lo]:
                 seg[k - lo].reason = reasons[k] or "no evidence on this frame"
@@ -248,35 +396,29 @@ def estimate(native, scene, camera, frames: Sequence[int],
         last = next((k for k in range(hi - 1, lo - 1, -1) if measured[k]), None)
         if first is None or last is None:
             continue
-        for order in (range(first, hi), range(first, lo - 1, -1)):
-            gray = _frame(read_gray(frames[first]))
-            if gray is None or not tracker.initialize(
-                    gray, directions[path["direction"][first]]).ok:
-                break
-            # The tracker takes the ground's albedo from this frame under the
-            # Sun it is given: the grid cell's shadows are a little off, so
-            # the frame is refined once and the tracker started again from
-            # the refined Sun (albedo by shadow edges measured, not guessed).
-            r = tracker.track_toward(gray, directions[path["direction"][first]])
-            if r.ok and _angle_deg(r.sun_in_world,
-                                   directions[path["direction"][first]]) <= REFINE_MAX_DEG:
-                tracker.initialize(gray, np.asarray(r.sun_in_world, dtype=float))
-            # Backward, the tracker holds from the first measured frame on.
-            follow = order.step < 0
+        for k in range(first, last + 1):
+            before[k] = k if measured[k] else before[k - 1]
+        for k in range(last, first - 1, -1):
+            after[k] = k if measured[k] else after[k + 1]
+        for order in (range(first, hi), range(first - 1, lo - 1, -1)):
+            follow = True
             for k in order:
-                if k == first and order.step < 0:
-                    continue  # refined on the way forward
                 if not usable[k - lo]:
                     continue
                 beyond = not first <= k <= last
                 if beyond and not follow:
                     continue  # lost past the evidence: nothing to carry
-                follow = refine(k, seg[k - lo], follow, beyond, last if k > last else first)
+                follow = refine(k, seg[k - lo], (s, order.step), first, beyond,
+                                last if k > last else first, order.step)
+    t_checked = time.perf_counter() - t0
     result.frames = raws
     t_end = time.perf_counter() - t0
     result.timing = {"table_s": t_table, "reference_s": t_setup - t_table,
                      "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
                      "tracking_ms_per_frame": 1000.0 * clock["tracking"] / max(1, n),
+                     "check_s": t_checked - t_evidence,
+                     "frames_read": reads["count"], "frames": n,
                      "total_s": t_end, "samples": sky.num_samples,
+                     "band_entries": sky.band_entries,
                      "directions": len(directions), "spacing_deg": spacing}
     return result
