@@ -1,5 +1,6 @@
 #include "sunlapse/video/frame_stream.h"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -25,7 +26,8 @@ struct FrameStream::Impl {
   std::mutex mutex;
   std::condition_variable ready, space;
   std::deque<StreamedFrame> queue;
-  size_t handed = 0;  // frames given to the consumer
+  size_t handed = 0;   // frames given to the consumer
+  int last_near = -1;  // the last frame decoded (near: never twice)
   bool stop = false;
   double wait_seconds = 0.0;
   std::thread thread;
@@ -37,13 +39,17 @@ struct FrameStream::Impl {
   StreamedFrame Decode(int index) {
     StreamedFrame f;
     f.index = index;
-    if (options.near) {
-      f.index = reader.SeekNear(index);
+    // Near: the key frame before the index when it is one not handed out
+    // yet (one decode after a seek), else the exact frame.
+    const int key = options.near ? reader.KeyFrameAtOrBefore(index) : -1;
+    if (key > last_near) {
+      f.index = reader.SeekNear(key);
       if (f.index < 0) {
         f.message = "the clip has no frame " + std::to_string(index + 1);
         f.index = index;
         return f;
       }
+      last_near = f.index;
     } else if (index < 0 ||
                (reader.position() != index && !reader.Seek(index))) {
       f.message = "the clip has no frame " + std::to_string(index + 1);
@@ -55,6 +61,7 @@ struct FrameStream::Impl {
       return f;
     }
     f.report = reader.last_frame();
+    last_near = std::max(last_near, f.index);
     if (bgr.empty()) {
       f.status = StreamedFrame::Status::kUnusable;
       f.message =

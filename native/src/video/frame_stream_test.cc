@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -85,6 +86,30 @@ TEST(FrameStream, SaysWhyAFrameIsMissingAndGoesOn) {
   EXPECT_EQ(f.status, StreamedFrame::Status::kPastEnd);
   EXPECT_NE(f.message.find("10"), std::string::npos) << f.message;
   EXPECT_FALSE(s.Next(&f));
+}
+
+TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
+  const Sequence seq("near", 1);  // for its folder
+  const std::string src = seq.Path(0);
+  const std::string movie = src + ".mp4";
+  // 120 frames whose blue channel is 2 x their index, a key frame every 30.
+  const std::string cmd =
+      "ffmpeg -v error -y -f lavfi -i \"color=c=black:s=32x24:r=25:d=4.8,"
+      "geq=r=0:g=0:b='2*N'\" -c:v libx264 -g 30 -keyint_min 30 "
+      "-sc_threshold 0 -pix_fmt yuv444p " +
+      movie + " >/dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no ffmpeg with libx264";
+  FrameStreamOptions o;
+  o.near = true;
+  FrameStream s(movie, {5, 40, 45, 100}, o);
+  std::vector<int> got;
+  StreamedFrame f;
+  while (s.Next(&f)) {
+    ASSERT_EQ(f.status, StreamedFrame::Status::kOk) << f.message;
+    got.push_back(f.index);
+  }
+  // 40's key frame (30) is new; 45's is 30 again, so 45 itself.
+  EXPECT_EQ(got, (std::vector<int>{0, 30, 45, 90}));
 }
 
 TEST(FrameStream, StopsWhenDroppedHalfWay) {

@@ -480,10 +480,34 @@ bool VideoReader::Seek(int index) {
   return true;
 }
 
+int VideoReader::KeyFrameAtOrBefore(int index) const {
+  if (index < 0 || (num_frames_ > 0 && index >= num_frames_)) return -1;
+  if (is_sequence_) return index;
+  const Movie& mv = *movie_;
+  AVStream* st = mv.decoder.stream();
+  const double ticks = static_cast<double>(mv.first_pts) +
+                       index * mv.frame_seconds / av_q2d(st->time_base);
+  if (!std::isfinite(ticks) || std::fabs(ticks) >= 9e18 ||
+      mv.frame_seconds <= 0.0)
+    return -1;
+  // The index holds decoding time stamps: with B-frames they run ahead of
+  // the presentation ones by the first entry's lag behind frame 0.
+  const AVIndexEntry* first = avformat_index_get_entry(st, 0);
+  if (first == nullptr) return -1;
+  const int64_t lag = mv.first_pts - first->timestamp;
+  const AVIndexEntry* e = avformat_index_get_entry_from_timestamp(
+      st, std::llround(ticks) - lag, AVSEEK_FLAG_BACKWARD);
+  if (e == nullptr || !(e->flags & AVINDEX_KEYFRAME)) return -1;
+  const double at = (static_cast<double>(e->timestamp) + lag - mv.first_pts) *
+                    av_q2d(st->time_base) / mv.frame_seconds;
+  if (!std::isfinite(at)) return -1;
+  const int64_t key = std::llround(at);
+  return key >= 0 && key <= index ? static_cast<int>(key) : -1;
+}
+
 int VideoReader::SeekNear(int index) {
   if (index < 0 || (num_frames_ > 0 && index >= num_frames_)) return -1;
-  if (is_sequence_ || index == position_ ||
-      (index > position_ && index <= position_ + 50)) {
+  if (is_sequence_ || index == position_ || index == position_ + 1) {
     return Seek(index) ? index : -1;
   }
   // The key frame at or before the target costs one decode; frames after it

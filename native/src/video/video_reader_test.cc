@@ -188,8 +188,12 @@ TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
     EXPECT_EQ(r.last_frame().index, at);
     EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * at, 4) << target;
   }
-  // Close ahead it decodes forward to the exact frame.
-  EXPECT_EQ(r.SeekNear(70), 70);
+  // The next frame is the next one, not its key frame.
+  EXPECT_EQ(r.SeekNear(61), 61);
+  // The container's index tells the key frames without moving the reader.
+  EXPECT_EQ(r.KeyFrameAtOrBefore(100), 90);
+  EXPECT_EQ(r.KeyFrameAtOrBefore(29), 0);
+  EXPECT_EQ(r.position(), 61);
   EXPECT_EQ(r.SeekNear(120), -1);
 }
 

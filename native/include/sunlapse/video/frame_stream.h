@@ -21,8 +21,10 @@ struct FrameStreamOptions {
   double gamma = 2.2;
   // Also hand out the 8-bit BGR frame (for a colour background).
   bool keep_bgr = false;
-  // Frames need not be exact: each is the cheapest to reach at or shortly
-  // before the index asked (VideoReader::SeekNear); `index` says which.
+  // Frames need not be exact (samples spread over the clip): each is the
+  // key frame at or before the index asked when that is one not handed out
+  // yet (one decode after a seek, VideoReader::SeekNear), else the exact
+  // frame; `index` says which.
   bool near = false;
   void Check() const;
 };

@@ -71,9 +71,12 @@ class VideoReader {
   // Moves to 0-based frame `index`; false if out of range.
   bool Seek(int index);
   // Moves to a frame at or shortly before `index` that is cheap to reach (a
-  // movie's key frame, unless `index` is close ahead); returns its index, or
-  // -1 if out of range. For frames that need not be exact (spread samples).
+  // movie's key frame, unless `index` is next); returns its index, or -1 if
+  // out of range. For frames that need not be exact (spread samples).
   int SeekNear(int index);
+  // The key frame at or before `index` from the container's index, without
+  // decoding (sequences: `index`); -1 when the container does not say.
+  int KeyFrameAtOrBefore(int index) const;
 
  private:
   struct Movie;
