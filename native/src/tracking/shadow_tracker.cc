@@ -112,6 +112,7 @@ struct ShadowTracker::Impl {
     ground_index = cv::Mat1i(H, W, -1);
     std::vector<double> px;
     const int y0 = o.ignore_top_rows, y1 = H - o.ignore_bottom_rows;
+    px.reserve(2 * static_cast<size_t>(std::max(0, y1 - y0)) * W);
     for (int y = y0; y < y1; ++y) {
       for (int x = 0; x < W; ++x) px.insert(px.end(), {double(x), double(y)});
     }
@@ -119,6 +120,10 @@ struct ShadowTracker::Impl {
     Hits hits(n);
     scene.IntersectPixels(camera, n, px.data(), hits.buffers());
     const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
+    int64_t on_ground = 0;
+    for (int64_t i = 0; i < n; ++i)
+      on_ground += hits.hit(i) && IsGround(hits.object_id[i]);
+    ground.reserve(static_cast<size_t>(on_ground));
     for (int64_t i = 0; i < n; ++i) {
       if (!hits.hit(i) || !IsGround(hits.object_id[i])) continue;
       const int x = static_cast<int>(px[2 * i]),
