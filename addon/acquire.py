@@ -60,19 +60,23 @@ def ground_samples(scene, camera, ground_ids: Sequence[int], rows, cols):
 
 
 def ground_and_model_shadow(scene, camera, ground_ids: Sequence[int], sun_in_world,
-                            top: int = 0):
-    """Dense uint8 masks (H x W, 255 = set): the model's ground as the camera
-    sees it (below row `top`), and the model's cast shadow on it toward
-    `sun_in_world`."""
+                            top: int = 0, stride: int = 1):
+    """Dense uint8 masks (255 = set): the model's ground as the camera sees
+    it (below row `top`), and the model's cast shadow on it toward
+    `sun_in_world`; at every `stride`-th pixel of the camera's rows and
+    columns (the size of image[::stride, ::stride])."""
     h, w = camera.height, camera.width
-    ys, xs = np.mgrid[top:h, 0:w]
+    ys, xs = np.mgrid[0:h:stride, 0:w:stride]
+    rows, cols = ys.shape
+    below = ys[:, 0] >= top
+    ys, xs = ys[below], xs[below]
     on, origins = ground_samples(scene, camera, ground_ids, ys.ravel(), xs.ravel())
     d = np.asarray(sun_in_world, dtype=np.float32)
     occ = scene.occluded(origins, np.ascontiguousarray(np.tile(d, (len(origins), 1))))
-    ground = np.zeros((h - top) * w, dtype=np.uint8)
-    shadow = np.zeros((h - top) * w, dtype=np.uint8)
+    ground = np.zeros(ys.size, dtype=np.uint8)
+    shadow = np.zeros(ys.size, dtype=np.uint8)
     ground[on] = 255
     shadow[np.flatnonzero(on)[occ.astype(bool)]] = 255
-    pad = np.zeros((top, w), dtype=np.uint8)
-    return (np.vstack([pad, ground.reshape(h - top, w)]),
-            np.vstack([pad, shadow.reshape(h - top, w)]))
+    pad = np.zeros((rows - ys.shape[0], cols), dtype=np.uint8)
+    return (np.vstack([pad, ground.reshape(-1, cols)]),
+            np.vstack([pad, shadow.reshape(-1, cols)]))

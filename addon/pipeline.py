@@ -138,6 +138,15 @@ def _gray(bgr, camera, method):
 # it unexplained), are recorded in the track file only.
 HINT_MIN_AREA = 5e-4
 HINT_MAX_DARKENING = 0.45
+# Unmodelled shadows are looked for on frames reduced to about this width
+# (every n-th pixel): the regions that matter are a few hundred pixels
+# there, and at 4K the full frames cost seconds and gigabytes.
+NOTE_WIDTH = 1280
+
+
+def note_stride(camera) -> int:
+    """Every how many pixels the unmodelled-shadow note looks."""
+    return max(1, -(-camera.width // NOTE_WIDTH))
 
 
 def detect_unmodelled_shadows(scene, camera, ground_ids, bgr, sun_in_world, samples,
@@ -147,16 +156,31 @@ def detect_unmodelled_shadows(scene, camera, ground_ids, bgr, sun_in_world, samp
     clip's shadow-free background (the median of `samples`, uint8 BGR frames
     spread over the clip), which tells a shadow from dark paint, stains or
     engravings. Also returns the masks used ("ground", "model_shadow").
-    None when fewer than 3 samples make no background."""
-    back = acquire.clip_background(samples)
+    None when fewer than 3 samples make no background.
+
+    Large frames are looked at every note_stride(camera)-th pixel (frame and
+    samples may be given reduced so already); the regions are reported in
+    the camera's pixels."""
+    stride = note_stride(camera)
+    h, w = -(-camera.height // stride), -(-camera.width // stride)
+
+    def reduced(image):
+        return image if image.shape[:2] == (h, w) else image[::stride, ::stride]
+    back = acquire.clip_background([reduced(f) for f in samples if f is not None])
     if back is None:
         return None
     native = native_loader.require()
-    ground, shadow = acquire.ground_and_model_shadow(scene, camera, ground_ids, sun_in_world, top)
+    ground, shadow = acquire.ground_and_model_shadow(scene, camera, ground_ids, sun_in_world, top,
+                                                     stride)
     # A camera shake of about a pixel per 320 of width is forgiven.
     found = native.detect_unmodelled_shadows(
-        acquire.linear_bgr(bgr, gamma), acquire.linear_bgr(back, gamma), ground, shadow,
-        registration_px=max(1, round(camera.width / 320)))
+        acquire.linear_bgr(reduced(bgr), gamma), acquire.linear_bgr(back, gamma), ground, shadow,
+        registration_px=max(1, round(w / 320)))
+    if stride > 1:
+        for r in found["regions"]:
+            r["area_px"] *= stride * stride
+            r["box"] = tuple(v * stride for v in r["box"])
+            r["centroid_px"] = tuple(v * stride for v in r["centroid_px"])
     return dict(found, ground=ground, model_shadow=shadow)
 
 
@@ -485,6 +509,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
     # The frames spread over the clip for the reference levels are kept in
     # colour for the clip's shadow-free background.
     samples = {}
+    stride = note_stride(camera)
 
     def read_gray(f):
         try:
@@ -515,7 +540,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
             if got.gray is not None:
                 why = _wrong_size(got.gray, camera)
                 if near and why is None:
-                    samples[f] = got.bgr
+                    samples[f] = got.bgr[::stride, ::stride].copy() if stride > 1 else got.bgr
                 yield f, why or got.gray
             elif got.status == past_end:
                 yield f, "the clip ended before this frame"
