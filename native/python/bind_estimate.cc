@@ -308,6 +308,22 @@ void BindEstimate(py::module_& m) {
           },
           "Next frame as uint8 (H,W,3) BGR; None for a frame that cannot be "
           "decoded; raises StopIteration at the end.")
+      .def(
+          "read_gray",
+          [](VideoReader& r) -> py::object {
+            cv::Mat gray;
+            bool more;
+            {
+              py::gil_scoped_release release;
+              more = r.ReadGray(&gray);
+            }
+            if (!more) throw py::stop_iteration();
+            if (gray.empty()) return py::none();
+            return MatAsArray(gray);
+          },
+          "Next frame as uint8 (H,W) gray (the luma as decoded, no colour "
+          "conversion); None for a frame that cannot be decoded; raises "
+          "StopIteration at the end.")
       .def("seek", &VideoReader::Seek, py::arg("index"),
            py::call_guard<py::gil_scoped_release>())
       .def("__iter__", [](py::object self) { return self; })

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -9,6 +10,8 @@
 #include <stdexcept>
 #include <thread>
 #include <utility>
+
+#include <opencv2/core.hpp>
 
 namespace sunlapse {
 
@@ -34,7 +37,31 @@ struct FrameStream::Impl {
 
   Impl(const std::string& path, std::vector<int> idx,
        const FrameStreamOptions& o)
-      : options(o), indices(std::move(idx)), reader(path) {}
+      : options(o),
+        indices(std::move(idx)),
+        reader(path),
+        table(1, 256, CV_32F) {
+    for (int v = 0; v < 256; ++v)
+      table.at<float>(0, v) = static_cast<float>(std::pow(v / 255.0, o.gamma));
+  }
+
+  // Float frames whose consumers have let go are filled again: a fresh
+  // 8 MB buffer per 1080p frame cost as much as the conversion itself (page
+  // faults). A buffer is free when the pool holds its only reference.
+  std::vector<cv::Mat> pool;
+  cv::Mat table;  // 8-bit value -> linear float
+
+  cv::Mat Recycled(int rows, int cols) {
+    for (const cv::Mat& m : pool) {
+      if (m.rows == rows && m.cols == cols && m.u != nullptr &&
+          m.u->refcount == 1)
+        return m;
+    }
+    cv::Mat m(rows, cols, CV_32F);
+    if (pool.size() < static_cast<size_t>(options.queue_frames) + 4)
+      pool.push_back(m);
+    return m;
+  }
 
   StreamedFrame Decode(int index) {
     StreamedFrame f;
@@ -55,8 +82,10 @@ struct FrameStream::Impl {
       f.message = "the clip has no frame " + std::to_string(index + 1);
       return f;
     }
+    // Colour only when asked for: gray straight from the decoder skips
+    // the colour conversion (the luma is the gray).
     cv::Mat bgr;
-    if (!reader.Read(&bgr)) {
+    if (!(options.keep_bgr ? reader.Read(&bgr) : reader.ReadGray(&bgr))) {
       f.message = "the clip ended before frame " + std::to_string(f.index + 1);
       return f;
     }
@@ -69,7 +98,12 @@ struct FrameStream::Impl {
       return f;
     }
     f.status = StreamedFrame::Status::kOk;
-    f.gray = ToLinearGray(bgr, options.gamma);
+    if (bgr.type() == CV_8UC1) {
+      f.gray = Recycled(bgr.rows, bgr.cols);
+      cv::LUT(bgr, table, f.gray);
+    } else {
+      f.gray = ToLinearGray(bgr, options.gamma);
+    }
     if (options.keep_bgr) f.bgr = std::move(bgr);
     return f;
   }

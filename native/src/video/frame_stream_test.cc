@@ -65,6 +65,26 @@ TEST(FrameStream, HandsOutTheFramesAskedInTheirOrderAsLinearGray) {
   EXPECT_FALSE(s.Next(&f));
 }
 
+// Buffers are reused once the consumer lets go of them, never before.
+TEST(FrameStream, FramesTheConsumerKeepsAreNeverOverwritten) {
+  const Sequence seq("keep", 12);
+  FrameStreamOptions o;
+  o.queue_frames = 1;
+  FrameStream s(seq.Path(0), {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, o);
+  std::vector<cv::Mat> kept;
+  StreamedFrame f;
+  int n = 0;
+  while (s.Next(&f)) {
+    if (n++ % 2 == 0) kept.push_back(f.gray);  // every other one let go
+  }
+  ASSERT_EQ(kept.size(), 6u);
+  for (size_t i = 0; i < kept.size(); ++i) {
+    EXPECT_NEAR(kept[i].at<float>(5, 5), Expected(2 * static_cast<int>(i), 2.2),
+                1e-6)
+        << i;
+  }
+}
+
 TEST(FrameStream, SaysWhyAFrameIsMissingAndGoesOn) {
   const Sequence seq("gaps", 4);
   std::ofstream(seq.Path(1)) << "not a png";

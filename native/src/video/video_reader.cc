@@ -137,21 +137,22 @@ class Decoder {
     return true;
   }
 
-  // frame() as 8-bit BGR. Same conversion as OpenCV's FFmpeg backend (bicubic,
-  // swscale's default colour matrix) so tracks match those read through it.
-  void ToBgr(cv::Mat* bgr) {
+  // frame() as 8-bit BGR, or 8-bit gray (the luma, no colour conversion).
+  // BGR: the same conversion as OpenCV's FFmpeg backend (bicubic, swscale's
+  // default colour matrix) so tracks match those read through it.
+  void ToImage(cv::Mat* out, bool gray) {
     const AVFrame* f = frame_;
-    sws_ = sws_getCachedContext(sws_, f->width, f->height,
-                                static_cast<AVPixelFormat>(f->format), f->width,
-                                f->height, AV_PIX_FMT_BGR24, SWS_BICUBIC,
-                                nullptr, nullptr, nullptr);
+    sws_ = sws_getCachedContext(
+        sws_, f->width, f->height, static_cast<AVPixelFormat>(f->format),
+        f->width, f->height, gray ? AV_PIX_FMT_GRAY8 : AV_PIX_FMT_BGR24,
+        SWS_BICUBIC, nullptr, nullptr, nullptr);
     if (sws_ == nullptr) {
-      bgr->release();
+      out->release();
       return;
     }
-    bgr->create(f->height, f->width, CV_8UC3);
-    uint8_t* dst[4] = {bgr->data, nullptr, nullptr, nullptr};
-    int dst_stride[4] = {static_cast<int>(bgr->step[0]), 0, 0, 0};
+    out->create(f->height, f->width, gray ? CV_8UC1 : CV_8UC3);
+    uint8_t* dst[4] = {out->data, nullptr, nullptr, nullptr};
+    int dst_stride[4] = {static_cast<int>(out->step[0]), 0, 0, 0};
     sws_scale(sws_, f->data, f->linesize, 0, f->height, dst, dst_stride);
   }
 
@@ -165,19 +166,21 @@ class Decoder {
   bool flushed_ = false;
 };
 
-// The first frame of one image file as BGR; the message says why not.
-std::string DecodeImage(const std::string& path, cv::Mat* bgr) {
+// The first frame of one image file as BGR (or gray); the message says why
+// not.
+std::string DecodeImage(const std::string& path, cv::Mat* image,
+                        bool gray = false) {
   Decoder d;
   std::string error = d.Open(path, /*single_image=*/true);
   if (error.empty()) {
     const int err = d.Next();
     if (err == 0) {
-      d.ToBgr(bgr);
-      return bgr->empty() ? "unsupported pixel format" : "";
+      d.ToImage(image, gray);
+      return image->empty() ? "unsupported pixel format" : "";
     }
     error = err == AVERROR_EOF ? "no image in the file" : AvError(err);
   }
-  bgr->release();
+  image->release();
   return error;
 }
 
@@ -340,10 +343,14 @@ int VideoReader::CountFrames() {
 }
 
 bool VideoReader::Read(cv::Mat* bgr) {
-  return is_sequence_ ? ReadSequence(bgr) : ReadMovie(bgr);
+  return is_sequence_ ? ReadSequence(bgr, false) : ReadMovie(bgr, false);
 }
 
-bool VideoReader::ReadSequence(cv::Mat* bgr) {
+bool VideoReader::ReadGray(cv::Mat* gray) {
+  return is_sequence_ ? ReadSequence(gray, true) : ReadMovie(gray, true);
+}
+
+bool VideoReader::ReadSequence(cv::Mat* bgr, bool gray) {
   if (position_ >= num_frames_) return false;
   last_ = FrameReport{};
   last_.index = position_;
@@ -354,7 +361,7 @@ bool VideoReader::ReadSequence(cv::Mat* bgr) {
     last_.message = "no file " + file;
     return true;
   }
-  const std::string error = DecodeImage(file, bgr);
+  const std::string error = DecodeImage(file, bgr, gray);
   if (!error.empty()) {
     last_.status = FrameStatus::kUndecodable;
     last_.message = "cannot decode " + file + " (" + error + ")";
@@ -373,7 +380,7 @@ bool VideoReader::ReadSequence(cv::Mat* bgr) {
   return true;
 }
 
-bool VideoReader::ReadMovie(cv::Mat* bgr) {
+bool VideoReader::ReadMovie(cv::Mat* bgr, bool gray) {
   Movie& mv = *movie_;
   last_ = FrameReport{};
   last_.index = position_;
@@ -409,7 +416,7 @@ bool VideoReader::ReadMovie(cv::Mat* bgr) {
                     std::to_string(height_);
     return true;
   }
-  mv.decoder.ToBgr(bgr);
+  mv.decoder.ToImage(bgr, gray);
   if (bgr->empty()) {
     last_.status = FrameStatus::kUndecodable;
     last_.message = "frame " + std::to_string(last_.index) +

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 namespace sunlapse {
@@ -63,6 +64,25 @@ TEST(VideoReader, ReadsANumberedSequenceFromItsFirstFile) {
   ASSERT_TRUE(r.Seek(2));
   ASSERT_TRUE(r.Read(&f));
   EXPECT_EQ(f.at<cv::Vec3b>(0, 0)[0], 20);
+}
+
+TEST(VideoReader, ReadsGrayWithoutColourConversionCloseToBgrsGray) {
+  const fs::path d = TempDir("gray");
+  cv::Mat img(24, 32, CV_8UC3);
+  cv::randu(img, 0, 255);
+  cv::imwrite((d / "g_1.png").string(), img);
+  cv::imwrite((d / "g_2.png").string(), img);
+  VideoReader r((d / "g_1.png").string());
+  cv::Mat bgr, gray, expected;
+  ASSERT_TRUE(r.Read(&bgr));
+  ASSERT_TRUE(r.ReadGray(&gray));
+  ASSERT_EQ(gray.type(), CV_8UC1);
+  cv::cvtColor(bgr, expected, cv::COLOR_BGR2GRAY);
+  cv::Mat diff;
+  cv::absdiff(gray, expected, diff);
+  double worst = 0;
+  cv::minMaxLoc(diff, nullptr, &worst);
+  EXPECT_LE(worst, 2.0);
 }
 
 TEST(VideoReader, CorruptFrameComesBackEmptyAndReadingGoesOn) {

@@ -66,6 +66,9 @@ class VideoReader {
   // a sequence) comes back as an empty Mat with true, last_frame() says why,
   // and reading goes on.
   bool Read(cv::Mat* bgr);
+  // The same as 8-bit gray: the luma as decoded (no colour conversion),
+  // cheaper than BGR when colour is not needed.
+  bool ReadGray(cv::Mat* gray);
   // What the last Read() returned.
   const FrameReport& last_frame() const { return last_; }
   // Moves to 0-based frame `index`; false if out of range.
@@ -81,8 +84,8 @@ class VideoReader {
  private:
   struct Movie;
   std::string SequencePath(int index) const;
-  bool ReadSequence(cv::Mat* bgr);
-  bool ReadMovie(cv::Mat* bgr);
+  bool ReadSequence(cv::Mat* image, bool gray);
+  bool ReadMovie(cv::Mat* image, bool gray);
 
   std::unique_ptr<Movie> movie_;
   std::string path_;
