@@ -520,17 +520,25 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
             return source.why_not()
         return _wrong_size(bgr, camera) or native.to_linear_gray(bgr, GAMMA[options.method])
 
-    def stream(fs, near):
-        """The frames in order, decoded ahead on a native thread (started
-        now, before the first is asked for)."""
+    def open_stream(fs, near):
         try:
-            frame_stream = native.FrameStream(
+            return native.FrameStream(
                 clip_path, [f - source.start for f in fs],
                 native.FrameStreamOptions(gamma=GAMMA[options.method], near=near,
                                           keep_bgr=near))
         except ValueError as e:
             raise PipelineError(f"cannot read the clip: {e}")
-        return streamed(frame_stream, near)
+
+    def stream(fs, near):
+        """The frames in order, decoded ahead on a native thread (started
+        now, before the first is asked for)."""
+        return streamed(open_stream(fs, near), near)
+
+    def frame_source(fs):
+        """The pass's frames: a native stream, and the index it reports for
+        each frame (its 0-based index in the clip)."""
+        pass_stream["stream"] = open_stream(fs, False)
+        return pass_stream["stream"], {f: f - source.start for f in fs}
 
     def streamed(frame_stream, near):
         start = source.start
@@ -546,10 +554,8 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
                 yield f, "the clip ended before this frame"
             else:
                 yield f, got.message or "frame not decodable"
-        if not near:
-            stream_wait["s"] = frame_stream.wait_seconds
 
-    stream_wait = {"s": 0.0}
+    pass_stream = {"stream": None}
 
     seconds = None
     if times is not None:
@@ -560,7 +566,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
             native, scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
             ignore_top_rows=options.ignore_top_rows,
             progress=None if progress is None else (lambda x: progress(0.95 * x)),
-            stream=stream)
+            stream=stream, source=frame_source)
     except whole_clip.Cancelled:
         raise PipelineError("cancelled")
     track.method["initial"] = track.method["tracking"] = "whole_clip"
@@ -598,6 +604,8 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
     if result.jumps:
         track.extra["jumps"] = result.jumps
     _finish(native, track, raws, options, times, progress, result.segments)
-    track.extra["timing"] = dict(result.timing, decode_wait_s=stream_wait["s"],
+    wait = 0.0 if pass_stream["stream"] is None else pass_stream["stream"].wait_seconds
+    pass_stream["stream"] = None
+    track.extra["timing"] = dict(result.timing, decode_wait_s=wait,
                                  total_s=time.perf_counter() - t0)
     return track

@@ -54,10 +54,6 @@ FULL_CONFIDENCE_MARGIN = 12.0
 # frame is refined again around the path's direction, and a result still
 # that far keeps half its confidence.
 AGREE_DEG = 4.0
-# The tracker starts in the pass over the clip on the first frame whose own
-# evidence leads every far direction by this much (log-likelihood units);
-# a wrong start costs only a second reading of the frames it spoilt.
-START_MARGIN = 6.0
 # The Sun's apparent motion bound (deg per hour), and per frame when the
 # frames' times are unknown (sun_path.h's generous bound).
 SUN_DEG_PER_HOUR = 15.5
@@ -108,26 +104,6 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(np.dot(a, b))))
 
 
-def _start(tracker, gray, sun_in_world):
-    """Starts the tracker on a frame under a grid direction: (whether it
-    started, its refined result on that frame or None).
-
-    The tracker takes the ground's albedo from this frame under the Sun it is
-    given: the grid cell's shadows are a little off, so the frame is refined
-    once and the tracker started again from the refined Sun (albedo by shadow
-    edges measured, not guessed)."""
-    if not tracker.initialize(gray, sun_in_world).ok:
-        return False, None
-    r = tracker.track_toward(gray, sun_in_world)
-    if r.ok and _angle_deg(r.sun_in_world, sun_in_world) <= REFINE_MAX_DEG:
-        refined = np.asarray(r.sun_in_world, dtype=float)
-        tracker.initialize(gray, refined)
-        r = tracker.track_toward(gray, refined)
-    if r.ok and _angle_deg(r.sun_in_world, sun_in_world) <= REFINE_MAX_DEG:
-        return True, r
-    return True, None
-
-
 def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     """k positions spread evenly over range(n) (all of them when n <= k)."""
     if n <= k:
@@ -147,7 +123,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
              ground_object_ids: Sequence[int], times_s: Optional[Sequence[float]] = None,
              ignore_top_rows: int = 0,
              progress: Optional[Callable[[float], object]] = None,
-             stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None
+             stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None,
+             source: Optional[Callable[[Sequence[int]], Tuple[object, dict]]] = None
              ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
@@ -157,7 +134,11 @@ def estimate(native, scene, camera, frames: Sequence[int],
     over the whole clip); with near=True each frame may be one shortly
     before the one asked that is cheaper to reach (a movie's key frame: the
     reference levels need frames spread over the clip, not exact ones).
-    read_gray is then only used for the few frames read again. `times_s`:
+    `source(frames)`, when given, returns (a native FrameSource giving
+    those frames in that order, decoded ahead, {frame: the index it reports
+    for it}) for the pass over the clip; without it the frames are read with
+    read_gray and held in memory (tests, synthetic clips). read_gray is
+    then only used for the few frames read again. `times_s`:
     capture times
     in seconds (None when unknown). `native`: the compiled module (passed in,
     so this controller imports nothing of the add-on's package)."""
@@ -208,56 +189,36 @@ def estimate(native, scene, camera, frames: Sequence[int],
         reads["count"] += 1
         return _frame(read_gray(frames[k]))
 
-    # The pass over the clip: evidence for every frame, and the tracker
-    # following the shadows on the same frames (checked against the path
-    # afterwards).
-    status, reasons = [], []
+    # The pass over the clip, in native code without Python's lock: evidence
+    # for every frame, and the tracker following the shadows on the same
+    # frames (checked against the path afterwards).
     ok = native.FrameEvidenceStatus.OK
     usable_status = (ok, native.FrameEvidenceStatus.NO_SHADOWS)
     directions = sky.directions
     tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
                                    ignore_top_rows=ignore_top_rows)
-    tracked: List[object] = [None] * n
     clock = {"tracking": 0.0, "done": 0}
-    following = False
-    started = {"any": False}
-    decoded = iter(stream([f for f in frames if f not in kept], False))
-    got: Gray
-    for k, f in enumerate(frames):
-        if f in kept:
-            got = kept.pop(f)
-        else:
-            g, got = next(decoded, (-1, None))
-            if g != f:
-                raise ValueError(f"stream gave frame {g} where {f} was asked")
-            reads["count"] += 1
-        tick(0.8 * k / n)
-        gray = _frame(got)
-        e = sky.add_frame(gray)
-        status.append(e.status)
-        reasons.append(got if isinstance(got, str) else (e.message or None))
-        if starts[k]:
-            following = False
-        if gray is None or e.status not in usable_status:
-            continue
-        sure = (e.status == ok and e.best_direction >= 0 and e.margin >= START_MARGIN)
-        if not following:
-            if sure:
-                following, tracked[k] = _start(tracker, gray, directions[e.best_direction])
-                started["any"] = started["any"] or following
-            continue
-        # A frame where the tracker loses the shadow (a cloud, a person)
-        # does not stop it: it widens its own search on the next ones.
-        r = tracker.track(gray)
-        clock["tracking"] += r.seconds
-        if sure and (not r.ok or _angle_deg(r.sun_in_world,
-                                            directions[e.best_direction]) > REFINE_MAX_DEG):
-            # The frame's own evidence is unmistakable and elsewhere: the
-            # tracker has drifted; steer it back (the path checks again).
-            r = tracker.track_toward(gray, directions[e.best_direction])
-            clock["tracking"] += r.seconds
-        if r.ok:
-            tracked[k] = r
+    rest = [f for f in frames if f not in kept]
+    if source is None:
+        frame_source = native.FrameList([(i, read_gray(f)) for i, f in enumerate(rest)])
+        index_of = {f: i for i, f in enumerate(rest)}
+    else:
+        frame_source, index_of = source(rest)
+    pass_options = native.ClipPassOptions(steer_deg=REFINE_MAX_DEG)
+    done = native.run_clip_pass(
+        frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
+        [kept.get(f) for f in frames], starts, camera, sky, tracker, pass_options,
+        lambda x: progress is None or progress(0.8 * x) is not False)
+    del kept, frame_source
+    if done["cancelled"]:
+        raise Cancelled()
+    reads["count"] += len(rest)
+    clock["tracking"] += done["tracking_seconds"]
+    started = {"any": done["tracker_started"]}
+    status = [p.evidence.status for p in done["frames"]]
+    reasons = [p.read_message or p.evidence.message or None for p in done["frames"]]
+    tracked: List[object] = [p.track for p in done["frames"]]
+    del done
     t_evidence = time.perf_counter() - t0
 
     path_options = native.SunPathOptions()
@@ -314,8 +275,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
             where["run"] = run
             return True
         gray = read_again(first)
-        ok_start = gray is not None and _start(tracker, gray,
-                                               directions[path["direction"][first]])[0]
+        ok_start = gray is not None and native.start_tracker(
+            tracker, gray, directions[path["direction"][first]], REFINE_MAX_DEG)[0]
         where["run"], where["last"] = run, first
         return ok_start
 

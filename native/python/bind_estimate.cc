@@ -356,7 +356,36 @@ void BindEstimate(py::module_& m) {
              "also hand out the uint8 BGR frame")
       .field("near", &FrameStreamOptions::near,
              "each frame the cheapest to reach at or before the one asked");
-  py::class_<FrameStream>(
+  py::class_<FrameSource>(m, "FrameSource",
+                          "Where a pass over a clip takes its frames from.");
+  py::class_<FrameList, FrameSource>(
+      m, "FrameList",
+      "Frames already in memory as a FrameSource (tests, synthetic clips).")
+      .def(py::init([](const py::list& items) {
+             // (index, float32 (H,W) gray | None | reason str) per frame;
+             // the frames are copied.
+             std::vector<StreamedFrame> frames;
+             for (const py::handle& h : items) {
+               const py::tuple t = h.cast<py::tuple>();
+               StreamedFrame f;
+               f.index = t[0].cast<int>();
+               const py::object v = t[1];
+               if (py::isinstance<py::str>(v)) {
+                 f.status = StreamedFrame::Status::kUnusable;
+                 f.message = v.cast<std::string>();
+               } else if (v.is_none()) {
+                 f.status = StreamedFrame::Status::kUnusable;
+                 f.message = "frame not decodable";
+               } else {
+                 f.status = StreamedFrame::Status::kOk;
+                 f.gray = FloatView(v.cast<py::array>(), "frame").clone();
+               }
+               frames.push_back(std::move(f));
+             }
+             return std::make_unique<FrameList>(std::move(frames));
+           }),
+           py::arg("frames"));
+  py::class_<FrameStream, FrameSource>(
       m, "FrameStream",
       "Frames decoded ahead on a thread of their own, as linear gray, in the "
       "order asked (0-based clip indices). Iterate for StreamedFrame.")

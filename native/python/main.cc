@@ -9,6 +9,7 @@ void BindEphemeris(py::module_& m);
 void BindEstimate(py::module_& m);
 void BindCalibration(py::module_& m);
 void BindSky(py::module_& m);
+void BindWholeClip(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -20,4 +21,5 @@ PYBIND11_MODULE(_native, m) {
   sunlapse::python::BindEstimate(m);
   sunlapse::python::BindCalibration(m);
   sunlapse::python::BindSky(m);
+  sunlapse::python::BindWholeClip(m);
 }

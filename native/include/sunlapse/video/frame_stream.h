@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -43,7 +44,31 @@ struct StreamedFrame {
   cv::Mat bgr;          // CV_8UC3, kOk with keep_bgr only
 };
 
-class FrameStream {
+// Where a pass over a clip takes its frames from, one after another.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  // The next frame; false after the last.
+  virtual bool Next(StreamedFrame* frame) = 0;
+};
+
+// Frames already in memory (tests, synthetic clips).
+class FrameList : public FrameSource {
+ public:
+  explicit FrameList(std::vector<StreamedFrame> frames)
+      : frames_(std::move(frames)) {}
+  bool Next(StreamedFrame* frame) override {
+    if (next_ >= frames_.size()) return false;
+    *frame = std::move(frames_[next_++]);
+    return true;
+  }
+
+ private:
+  std::vector<StreamedFrame> frames_;
+  size_t next_ = 0;
+};
+
+class FrameStream : public FrameSource {
  public:
   // Reads `indices` (0-based clip frames, in that order; consecutive ones
   // without seeking) on a thread of its own. Throws std::invalid_argument
@@ -57,7 +82,7 @@ class FrameStream {
 
   // The next frame in the order asked; false after the last. Blocks until it
   // is decoded.
-  bool Next(StreamedFrame* frame);
+  bool Next(StreamedFrame* frame) override;
   // Seconds Next() spent waiting for the decoder so far (the consumer idle:
   // decoding is the bottleneck when this is most of the run).
   double wait_seconds() const;

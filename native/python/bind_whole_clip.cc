@@ -1,0 +1,94 @@
+// Bindings of the whole-clip pass (whole_clip/clip_pass.h).
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "images.h"
+#include "options.h"
+#include "sunlapse/whole_clip/clip_pass.h"
+
+namespace sunlapse::python {
+
+void BindWholeClip(py::module_& m) {
+  OptionsClass<ClipPassOptions>(m, "ClipPassOptions",
+                                "Options of run_clip_pass (clip_pass.h).")
+      .field("start_margin", &ClipPassOptions::start_margin,
+             "evidence lead that starts the tracker (log-likelihood)")
+      .field("steer_deg", &ClipPassOptions::steer_deg,
+             "drift from unmistakable evidence that steers the tracker (deg)")
+      .field("progress_every", &ClipPassOptions::progress_every,
+             "frames between progress calls");
+
+  py::class_<ClipPassFrame>(m, "ClipPassFrame", "One frame of a clip pass.")
+      .def_readonly("index", &ClipPassFrame::index)
+      .def_readonly("read_message", &ClipPassFrame::read_message)
+      .def_readonly("evidence", &ClipPassFrame::evidence)
+      .def_property_readonly("track", [](const ClipPassFrame& f) -> py::object {
+        return f.tracked ? py::cast(f.track) : py::none();
+      });
+
+  m.def(
+      "run_clip_pass",
+      [](FrameSource& source, const std::vector<int>& source_index,
+         const py::list& kept, const std::vector<uint8_t>& segment_start,
+         const Camera& camera, SkyEvidence& sky, ShadowTracker& tracker,
+         const ClipPassOptions& options, const py::object& progress) {
+        std::vector<cv::Mat> mats;
+        for (const py::handle& f : kept)
+          mats.push_back(GrayArg(py::reinterpret_borrow<py::object>(f)));
+        std::function<bool(double)> cb;
+        if (!progress.is_none()) {
+          cb = [progress](double fraction) {
+            py::gil_scoped_acquire gil;
+            const py::object r = progress(fraction);
+            return r.is_none() || r.cast<bool>();
+          };
+        }
+        ClipPassResult r;
+        {
+          py::gil_scoped_release release;
+          r = RunClipPass(&source, source_index, mats, segment_start, camera,
+                          &sky, &tracker, options, cb);
+        }
+        py::dict out;
+        out["cancelled"] = r.status == ClipPassResult::Status::kCancelled;
+        out["frames"] = py::cast(std::move(r.frames));
+        out["tracker_started"] = r.tracker_started;
+        out["tracking_seconds"] = r.tracking_seconds;
+        out["seconds"] = r.seconds;
+        return out;
+      },
+      py::arg("source"), py::arg("source_index"), py::arg("kept"),
+      py::arg("segment_start"), py::arg("camera"), py::arg("sky"),
+      py::arg("tracker"), py::arg("options") = ClipPassOptions(),
+      py::arg("progress") = py::none(),
+      "The pass over a clip without Python's lock: each frame scored against "
+      "the sky and followed by the tracker (clip_pass.h). kept[k]: frame k "
+      "already read (float32 gray) or None to take the source's next, whose "
+      "index must be source_index[k]. progress(fraction) returning False "
+      "cancels.");
+
+  m.def(
+      "start_tracker",
+      [](ShadowTracker& tracker, const py::array& frame,
+         const Eigen::Vector3d& sun_in_world, double refine_max_deg) {
+        const cv::Mat img = FloatView(frame, "frame");
+        TrackedFrame refined;
+        bool started;
+        {
+          py::gil_scoped_release release;
+          started = StartTracker(&tracker, img, sun_in_world, refine_max_deg,
+                                 &refined);
+        }
+        return py::make_tuple(
+            started, refined.ok ? py::cast(refined) : py::object(py::none()));
+      },
+      py::arg("tracker"), py::arg("frame"), py::arg("sun_in_world"),
+      py::arg("refine_max_deg"),
+      "Starts the tracker on a frame under a grid direction, refined once: "
+      "(started, its refined TrackedFrame or None).");
+}
+
+}  // namespace sunlapse::python

@@ -1,0 +1,131 @@
+#include "sunlapse/whole_clip/clip_pass.h"
+
+#include <chrono>
+#include <stdexcept>
+#include <utility>
+
+#include "sunlapse/common/angles.h"
+
+namespace sunlapse {
+
+void ClipPassOptions::Check() const {
+  if (!(start_margin >= 0.0))
+    throw std::invalid_argument("start_margin must be >= 0");
+  if (!(steer_deg > 0.0 && steer_deg <= 180.0))
+    throw std::invalid_argument("steer_deg must be in (0, 180]");
+  if (progress_every < 1)
+    throw std::invalid_argument("progress_every must be >= 1");
+}
+
+bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
+                  const Eigen::Vector3d& sun_in_world, double refine_max_deg,
+                  TrackedFrame* refined) {
+  *refined = TrackedFrame();
+  if (!tracker->Initialize(frame, sun_in_world).ok) return false;
+  TrackedFrame r = tracker->Track(frame, sun_in_world);
+  if (r.ok && AngleBetweenDeg(r.sun_in_world, sun_in_world) <= refine_max_deg) {
+    const Eigen::Vector3d first = r.sun_in_world;
+    tracker->Initialize(frame, first);
+    r = tracker->Track(frame, first);
+  }
+  r.ok =
+      r.ok && AngleBetweenDeg(r.sun_in_world, sun_in_world) <= refine_max_deg;
+  *refined = std::move(r);
+  return true;
+}
+
+ClipPassResult RunClipPass(FrameSource* source,
+                           const std::vector<int>& source_index,
+                           const std::vector<cv::Mat>& kept,
+                           const std::vector<uint8_t>& segment_start,
+                           const Camera& camera, SkyEvidence* sky,
+                           ShadowTracker* tracker,
+                           const ClipPassOptions& options,
+                           const std::function<bool(double)>& progress) {
+  options.Check();
+  const size_t n = kept.size();
+  if (source_index.size() != n ||
+      (!segment_start.empty() && segment_start.size() != n))
+    throw std::invalid_argument(
+        "source_index, kept and segment_start: one per frame");
+  const auto t0 = std::chrono::steady_clock::now();
+  ClipPassResult out;
+  out.frames.resize(n);
+  const SkyGrid& grid = sky->grid();
+  bool following = false;
+  for (size_t k = 0; k < n; ++k) {
+    if (progress && k % options.progress_every == 0 &&
+        !progress(static_cast<double>(k) / n)) {
+      out.status = ClipPassResult::Status::kCancelled;
+      out.message = "cancelled";
+      out.frames.resize(k);
+      return out;
+    }
+    ClipPassFrame& pf = out.frames[k];
+    cv::Mat gray;
+    if (!kept[k].empty()) {
+      gray = kept[k];
+      pf.index = source_index[k];
+    } else {
+      StreamedFrame f;
+      if (!source->Next(&f) || f.index != source_index[k]) {
+        throw std::runtime_error("the frame source gave another frame than " +
+                                 std::to_string(source_index[k] + 1));
+      }
+      pf.index = f.index;
+      if (f.status != StreamedFrame::Status::kOk) {
+        pf.read_message = f.message.empty() ? "frame not decodable" : f.message;
+      } else if (f.gray.cols != camera.width() ||
+                 f.gray.rows != camera.height()) {
+        pf.read_message = "frame is " + std::to_string(f.gray.cols) + "x" +
+                          std::to_string(f.gray.rows) + ", not the camera's " +
+                          std::to_string(camera.width()) + "x" +
+                          std::to_string(camera.height()) +
+                          ": not the scene's footage";
+      } else {
+        gray = std::move(f.gray);
+      }
+    }
+    pf.evidence = sky->AddFrame(gray);
+    if (!segment_start.empty() && segment_start[k]) following = false;
+    const FrameEvidence& e = pf.evidence;
+    if (gray.empty() || (e.status != FrameEvidence::Status::kOk &&
+                         e.status != FrameEvidence::Status::kNoShadows))
+      continue;
+    const bool sure = e.status == FrameEvidence::Status::kOk &&
+                      e.best_direction >= 0 && e.margin >= options.start_margin;
+    if (!following) {
+      if (sure) {
+        following =
+            StartTracker(tracker, gray, grid.direction(e.best_direction),
+                         options.steer_deg, &pf.track);
+        pf.tracked = following && pf.track.ok;
+        out.tracker_started = out.tracker_started || following;
+        out.tracking_seconds += pf.track.seconds;
+      }
+      continue;
+    }
+    // A frame where the tracker loses the shadow (a cloud, a person) does
+    // not stop it: it widens its own search on the next ones.
+    TrackedFrame r = tracker->Track(gray);
+    out.tracking_seconds += r.seconds;
+    if (sure) {
+      const Eigen::Vector3d& best = grid.direction(e.best_direction);
+      if (!r.ok || AngleBetweenDeg(r.sun_in_world, best) > options.steer_deg) {
+        // The frame's own evidence is unmistakable and elsewhere: the
+        // tracker has drifted; steer it back (the path checks again).
+        r = tracker->Track(gray, best);
+        out.tracking_seconds += r.seconds;
+      }
+    }
+    pf.tracked = r.ok;
+    pf.track = std::move(r);
+  }
+  if (progress) progress(1.0);
+  out.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+          .count();
+  return out;
+}
+
+}  // namespace sunlapse

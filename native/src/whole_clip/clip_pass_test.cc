@@ -1,0 +1,133 @@
+#include "sunlapse/whole_clip/clip_pass.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "sunlapse/common/angles.h"
+#include "synthetic.h"
+
+namespace sunlapse {
+namespace {
+
+// A textured ground under noise, like real paving.
+testing::RenderOptions Textured(uint32_t seed) {
+  testing::RenderOptions o;
+  o.noise = 0.01;
+  o.seed = seed;
+  o.ambient = 0.15;
+  o.albedo = [](int id, const Eigen::Vector3f& p) {
+    if (id != 0) return 0.5;
+    const int tiles = (static_cast<int>(std::floor(p.x() * 2)) +
+                       static_cast<int>(std::floor(p.y() * 2))) &
+                      1;
+    return 0.3 + 0.08 * tiles +
+           0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
+  };
+  return o;
+}
+
+Eigen::Vector3d PathAt(int f, int n) {
+  const double t = static_cast<double>(f) / (n - 1);
+  return SunInWorldFromAngles(55 - 20 * t, 110 + 50 * t);
+}
+
+struct Fixture {
+  Scene scene = testing::BenchScene().Build();
+  Camera cam = testing::LookAt({4, -12, 9}, {0, 0, 0}, 320, 240);
+  int n = 16;
+  std::vector<cv::Mat> frames;
+  SkyEvidence sky{scene, cam, SkyEvidenceOptions()};
+  ShadowTracker tracker{scene, cam, [] {
+                          ShadowTrackerOptions o;
+                          o.ground_object_ids = {0};
+                          return o;
+                        }()};
+  Fixture() {
+    for (int f = 0; f < n; ++f)
+      frames.push_back(
+          testing::RenderLambertian(scene, cam, PathAt(f, n), Textured(f + 1)));
+    sky.SetReference({frames[0], frames[5], frames[10], frames[15]});
+  }
+  // The frames as a source; frame `broken` undecodable, `small` too small.
+  FrameList Source(int broken, int small) const {
+    std::vector<StreamedFrame> list;
+    for (int f = 0; f < n; ++f) {
+      StreamedFrame s;
+      s.index = f;
+      s.status = StreamedFrame::Status::kOk;
+      s.gray = frames[f];
+      if (f == broken) {
+        s.status = StreamedFrame::Status::kUnusable;
+        s.gray = cv::Mat();
+        s.message = "corrupt packet";
+      }
+      if (f == small) s.gray = cv::Mat(10, 10, CV_32F, cv::Scalar(0.5));
+      list.push_back(s);
+    }
+    return FrameList(std::move(list));
+  }
+  std::vector<int> Indices() const {
+    std::vector<int> v;
+    for (int f = 0; f < n; ++f) v.push_back(f);
+    return v;
+  }
+};
+
+TEST(ClipPass, ScoresEveryFrameAndFollowsTheSunThroughBrokenFrames) {
+  Fixture fx;
+  // Frame 3 was read before (kept): the source does not give it again.
+  std::vector<cv::Mat> kept(fx.n);
+  kept[3] = fx.frames[3];
+  std::vector<StreamedFrame> rest;
+  FrameList all = fx.Source(/*broken=*/6, /*small=*/9);
+  for (StreamedFrame s; all.Next(&s);)
+    if (s.index != 3) rest.push_back(s);
+  FrameList source(std::move(rest));
+  const ClipPassResult r =
+      RunClipPass(&source, fx.Indices(), kept, {}, fx.cam, &fx.sky, &fx.tracker,
+                  ClipPassOptions(), nullptr);
+  ASSERT_EQ(r.status, ClipPassResult::Status::kSuccess);
+  ASSERT_EQ(r.frames.size(), static_cast<size_t>(fx.n));
+  EXPECT_TRUE(r.tracker_started);
+  EXPECT_EQ(r.frames[6].read_message, "corrupt packet");
+  EXPECT_NE(r.frames[9].read_message.find("not the camera's 320x240"),
+            std::string::npos)
+      << r.frames[9].read_message;
+  for (int f = 0; f < fx.n; ++f) {
+    const ClipPassFrame& pf = r.frames[f];
+    EXPECT_EQ(pf.index, f);
+    if (f == 6 || f == 9) {
+      EXPECT_FALSE(pf.tracked) << f;
+      EXPECT_EQ(pf.evidence.status, FrameEvidence::Status::kNoFrame) << f;
+      continue;
+    }
+    EXPECT_EQ(pf.evidence.status, FrameEvidence::Status::kOk) << f;
+    ASSERT_TRUE(pf.tracked) << f << ": " << pf.track.reason;
+    EXPECT_LT(AngleBetweenDeg(pf.track.sun_in_world, PathAt(f, fx.n)), 1.0)
+        << "frame " << f;
+  }
+  EXPECT_EQ(fx.sky.num_frames(), fx.n);
+}
+
+TEST(ClipPass, StopsWhenAskedAndRefusesAMismatchedSource) {
+  Fixture fx;
+  FrameList source = fx.Source(-1, -1);
+  int calls = 0;
+  const ClipPassResult r = RunClipPass(
+      &source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam, &fx.sky,
+      &fx.tracker, ClipPassOptions(), [&](double) { return ++calls < 2; });
+  EXPECT_EQ(r.status, ClipPassResult::Status::kCancelled);
+  EXPECT_LT(r.frames.size(), static_cast<size_t>(fx.n));
+  FrameList other = fx.Source(-1, -1);
+  std::vector<int> shifted = fx.Indices();
+  shifted[0] = 5;
+  EXPECT_THROW(
+      RunClipPass(&other, shifted, std::vector<cv::Mat>(fx.n), {}, fx.cam,
+                  &fx.sky, &fx.tracker, ClipPassOptions(), nullptr),
+      std::runtime_error);
+}
+
+}  // namespace
+}  // namespace sunlapse
