@@ -34,10 +34,11 @@ scene's estimate run once), and a summary against issue 18's targets.
 Figures only: the exit code is 0 whatever they are (non-zero only for bad
 flags or a missing native build). Not part of tools/test.sh.
 
-Time on this 2-core machine with today's code: the first run encodes the clips
-(the 10,000-frame 1080p one takes several minutes), then the estimates take
-roughly 60 ms per 1080p frame, so the defaults run for about 20-30 minutes;
---sizes 720 --long '' takes about a minute.
+Time on this 2-core machine (estimate of commit 78aafb8, ~40 ms per 1080p
+frame): the first run of the defaults took 27 minutes with the suite, 15 of
+them encoding the clips (12 for the 10,000-frame one); re-runs use the cached
+clips and take about 10 minutes (the suite adds 2); --sizes 720 --long ''
+takes under a minute.
 """
 import argparse
 import hashlib
