@@ -1,15 +1,17 @@
 """bench/whole_run.py's helpers that need no Blender: the ping-pong frame
 order of its long clips and its flag parsing."""
 import argparse
+import importlib.util
 import os
-import sys
 
 import pytest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
-    os.path.abspath(__file__)))), "bench"))
-
-import whole_run  # noqa: E402
+# Loaded by path: putting bench/ on sys.path would let its modules shadow others.
+_PATH = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__)))), "bench", "whole_run.py")
+_spec = importlib.util.spec_from_file_location("whole_run", _PATH)
+whole_run = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(whole_run)
 
 
 @pytest.mark.parametrize("count,length", [(90, 10000), (90, 1000), (2, 7), (5, 5), (3, 1)])
