@@ -100,8 +100,13 @@ class Cancelled(Exception):
 
 
 def _angle_deg(a, b) -> float:
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(np.dot(a, b))))
+    """Angle between two 3-vectors (deg); plain floats, as it runs per frame
+    (numpy's per-call overhead was most of the check's time)."""
+    ax, ay, az = (float(v) for v in a)
+    bx, by, bz = (float(v) for v in b)
+    cross = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
+                      + (ax * by - ay * bx) ** 2)
+    return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
 def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
@@ -194,7 +199,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     # frames (checked against the path afterwards).
     ok = native.FrameEvidenceStatus.OK
     usable_status = (ok, native.FrameEvidenceStatus.NO_SHADOWS)
-    directions = sky.directions
+    directions = [tuple(d) for d in sky.directions.tolist()]
     tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
                                    ignore_top_rows=ignore_top_rows)
     clock = {"tracking": 0.0, "done": 0}
@@ -247,7 +252,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
                        "margin": [round(float(v), 2) for v in margins],
                        "significance": [round(float(v), 1) for v in path["significance"]],
                        "path_margin": [round(float(v), 1) for v in path["path_margin"]],
-                       "path_sun_in_world": [[round(float(v), 5) for v in directions[d]]
+                       "path_sun_in_world": [[round(v, 5) for v in directions[d]]
                                              for d in path["direction"]]}
     best = max(range(n), key=lambda k: (measured[k], margins[k]))
     result.anchor = frames[best] if measured[best] else None

@@ -5,6 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace sunlapse {
 namespace {
 
@@ -91,38 +94,46 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     const double in_min = *best_in;
     const int in_arg = static_cast<int>(best_in - in.begin());
     const double r = radius(t);
-    for (int d = 0; d < D; ++d) {
-      double c = kInf;
-      int arg = -1;
-      bool jump = false;
-      if (hard) {
-        c = in_min, arg = in_arg;
-      } else {
-        if (r <= grid.cached_radius_deg()) {
-          for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
-            if (nb.angle_deg > r) continue;
-            const double q = nb.angle_deg / r;
-            const double step = in[nb.index] + o.step_weight * q * q;
-            if (step < c) c = step, arg = nb.index;
-          }
-        } else {
-          for (int p : grid.Within(d, r)) {
-            const double ang =
-                std::acos(std::clamp(grid.direction(p).dot(grid.direction(d)),
+    // Directions are independent: in parallel (the solve is a few ms a
+    // frame on long clips, after the pass, with nothing to overlap it).
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, D, 128),
+        [&](const tbb::blocked_range<int>& range) {
+          for (int d = range.begin(); d < range.end(); ++d) {
+            double c = kInf;
+            int arg = -1;
+            bool jump = false;
+            if (hard) {
+              c = in_min, arg = in_arg;
+            } else {
+              if (r <= grid.cached_radius_deg()) {
+                for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
+                  if (nb.angle_deg > r) continue;
+                  const double q = nb.angle_deg / r;
+                  const double step = in[nb.index] + o.step_weight * q * q;
+                  if (step < c) c = step, arg = nb.index;
+                }
+              } else {
+                for (int p : grid.Within(d, r)) {
+                  const double ang =
+                      std::acos(
+                          std::clamp(grid.direction(p).dot(grid.direction(d)),
                                      -1.0, 1.0)) /
-                kDeg;
-            const double step = in[p] + o.step_weight * (ang / r) * (ang / r);
-            if (step < c) c = step, arg = p;
+                      kDeg;
+                  const double step =
+                      in[p] + o.step_weight * (ang / r) * (ang / r);
+                  if (step < c) c = step, arg = p;
+                }
+              }
+              if (o.jump_cost >= 0 && in_min + o.jump_cost < c) {
+                c = in_min + o.jump_cost, arg = in_arg, jump = true;
+              }
+            }
+            (*out_cost)[d] = c;
+            if (back_row) back_row[d] = arg;
+            if (jumped_row) jumped_row[d] = hard || jump;
           }
-        }
-        if (o.jump_cost >= 0 && in_min + o.jump_cost < c) {
-          c = in_min + o.jump_cost, arg = in_arg, jump = true;
-        }
-      }
-      (*out_cost)[d] = c;
-      if (back_row) back_row[d] = arg;
-      if (jumped_row) jumped_row[d] = hard || jump;
-    }
+        });
   };
 
   // Forward: alpha[t][d], the best path's cost over frames 0..t ending at d.
