@@ -44,7 +44,8 @@ void ShadowTrackerOptions::Check() const {
           "need 0 < tolerance_deg <= search_step_deg");
   Require(loss_scale > 0, "loss_scale must be > 0");
   Require(min_contrast >= 0, "min_contrast must be >= 0");
-  Require(subsamples >= 1 && subsamples <= 4, "subsamples must be in [1, 4]");
+  Require(subsamples >= 0 && subsamples <= 4,
+          "subsamples must be in [0, 4] (0: by the frame's width)");
   Require(ignore_top_rows >= 0 && ignore_bottom_rows >= 0,
           "ignore_top_rows/ignore_bottom_rows must be >= 0");
 }
@@ -102,7 +103,9 @@ struct ShadowTracker::Impl {
   int64_t rays_cast = 0, evaluations = 0;  // counters of the current frame
 
   Impl(const Scene& s, const Camera& c, const ShadowTrackerOptions& opt)
-      : scene(s), camera(c), o(opt), W(c.width()), H(c.height()) {}
+      : scene(s), camera(c), o(opt), W(c.width()), H(c.height()) {
+    if (o.subsamples == 0) o.subsamples = W < 1280 ? 2 : 1;
+  }
 
   bool IsGround(int32_t id) const {
     return internal::IsGround(o.ground_object_ids, id);
