@@ -175,6 +175,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
             kept[f], budget = gray, budget - gray.nbytes
     used = sky.set_reference(reference)
+    used_frames = len(reference)
     del reference
     t_setup = time.perf_counter() - t0
     if used == 0:
@@ -188,7 +189,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         for k in range(1, n):
             if times_s[k] < times_s[k - 1]:
                 starts[k] = 1
-    reads = {"count": len(spread(n))}
+    reads = {"count": used_frames}
 
     def read_again(k):
         reads["count"] += 1

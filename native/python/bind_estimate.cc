@@ -355,7 +355,9 @@ void BindEstimate(py::module_& m) {
       .field("keep_bgr", &FrameStreamOptions::keep_bgr,
              "also hand out the uint8 BGR frame")
       .field("near", &FrameStreamOptions::near,
-             "each frame the cheapest to reach at or before the one asked");
+             "each frame the cheapest to reach at or before the one asked")
+      .field("near_min_frames", &FrameStreamOptions::near_min_frames,
+             "near: key frames alone when at least this many");
   py::class_<FrameSource>(m, "FrameSource",
                           "Where a pass over a clip takes its frames from.");
   py::class_<FrameList, FrameSource>(
@@ -396,6 +398,7 @@ void BindEstimate(py::module_& m) {
       .def_property_readonly("width", &FrameStream::width)
       .def_property_readonly("height", &FrameStream::height)
       .def_property_readonly("wait_seconds", &FrameStream::wait_seconds)
+      .def("__len__", &FrameStream::size)
       .def("__iter__", [](py::object self) { return self; })
       .def("__next__", [](FrameStream& s) {
         StreamedFrame f;

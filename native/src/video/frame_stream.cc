@@ -18,6 +18,8 @@ namespace sunlapse {
 void FrameStreamOptions::Check() const {
   if (queue_frames < 1 || queue_frames > 64)
     throw std::invalid_argument("queue_frames must be in [1, 64]");
+  if (near_min_frames < 1)
+    throw std::invalid_argument("near_min_frames must be >= 1");
   if (!(gamma > 0.0 && gamma <= 10.0))
     throw std::invalid_argument("gamma must be in (0, 10]");
 }
@@ -134,6 +136,20 @@ FrameStream::FrameStream(const std::string& path, std::vector<int> indices,
                          const FrameStreamOptions& options) {
   options.Check();
   impl_ = std::make_unique<Impl>(path, std::move(indices), options);
+  if (options.near) {
+    // The distinct key frames of the indices, from the container's index
+    // (no decoding): enough of them make the frames read.
+    std::vector<int> keys;
+    bool known = true;
+    for (int index : impl_->indices) {
+      const int key = impl_->reader.KeyFrameAtOrBefore(index);
+      known = known && key >= 0;
+      if (key >= 0 && std::find(keys.begin(), keys.end(), key) == keys.end())
+        keys.push_back(key);
+    }
+    if (known && static_cast<int>(keys.size()) >= options.near_min_frames)
+      impl_->indices = keys;
+  }
   impl_->thread = std::thread([this] { impl_->Run(); });
 }
 
@@ -168,6 +184,9 @@ double FrameStream::wait_seconds() const {
 }
 
 int FrameStream::width() const { return impl_->reader.width(); }
+int FrameStream::size() const {
+  return static_cast<int>(impl_->indices.size());
+}
 int FrameStream::height() const { return impl_->reader.height(); }
 
 }  // namespace sunlapse

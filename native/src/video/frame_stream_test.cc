@@ -121,6 +121,7 @@ TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
   if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no ffmpeg with libx264";
   FrameStreamOptions o;
   o.near = true;
+  o.near_min_frames = 8;  // 4 distinct key frames: not enough
   FrameStream s(movie, {5, 40, 45, 100}, o);
   std::vector<int> got;
   StreamedFrame f;
@@ -130,6 +131,13 @@ TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
   }
   // 40's key frame (30) is new; 45's is 30 again, so 45 itself.
   EXPECT_EQ(got, (std::vector<int>{0, 30, 45, 90}));
+  // With enough distinct key frames, only they are read.
+  o.near_min_frames = 3;
+  FrameStream keys(movie, {5, 40, 45, 100}, o);
+  EXPECT_EQ(keys.size(), 3);
+  got.clear();
+  while (keys.Next(&f)) got.push_back(f.index);
+  EXPECT_EQ(got, (std::vector<int>{0, 30, 90}));
 }
 
 TEST(FrameStream, StopsWhenDroppedHalfWay) {

@@ -25,8 +25,12 @@ struct FrameStreamOptions {
   // Frames need not be exact (samples spread over the clip): each is the
   // key frame at or before the index asked when that is one not handed out
   // yet (one decode after a seek, VideoReader::SeekNear), else the exact
-  // frame; `index` says which.
+  // frame; `index` says which. When the clip has at least near_min_frames
+  // distinct key frames for the indices asked, only those key frames are
+  // read (fewer frames than asked, each costing one decode); else each
+  // index gives one frame as above.
   bool near = false;
+  int near_min_frames = 8;
   void Check() const;
 };
 
@@ -81,13 +85,15 @@ class FrameStream : public FrameSource {
   FrameStream& operator=(const FrameStream&) = delete;
 
   // The next frame in the order asked; false after the last. Blocks until it
-  // is decoded.
+  // is decoded. size() frames in all.
   bool Next(StreamedFrame* frame) override;
   // Seconds Next() spent waiting for the decoder so far (the consumer idle:
   // decoding is the bottleneck when this is most of the run).
   double wait_seconds() const;
   int width() const;
   int height() const;
+  // How many frames Next() gives in all.
+  int size() const;
 
  private:
   struct Impl;
