@@ -134,19 +134,17 @@ def estimate(native, scene, camera, frames: Sequence[int],
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
     sentence saying why there is none (not decodable, another size, a file
-    missing from a sequence). `stream(frames, near)`, when given, yields
-    (frame, the same) for the frames in that order, decoded ahead (the pass
-    over the whole clip); with near=True each frame may be one shortly
-    before the one asked that is cheaper to reach (a movie's key frame: the
-    reference levels need frames spread over the clip, not exact ones).
-    `source(frames)`, when given, returns (a native FrameSource giving
-    those frames in that order, decoded ahead, {frame: the index it reports
-    for it}) for the pass over the clip; without it the frames are read with
-    read_gray and held in memory (tests, synthetic clips). read_gray is
-    then only used for the few frames read again. `times_s`:
-    capture times
-    in seconds (None when unknown). `native`: the compiled module (passed in,
-    so this controller imports nothing of the add-on's package)."""
+    missing from a sequence); it reads the few frames read again after the
+    pass. `stream(frames, near)`, when given, yields (frame, the same) for the
+    reference frames spread over the clip, decoded ahead; near=True lets a
+    frame be one shortly before the one asked that is cheaper to reach (a
+    movie's key frame), or leaves some out. `source(frames)`, when given,
+    returns (a native FrameSource giving those frames in that order, decoded
+    ahead, {frame: the index it reports for it}) for the pass over the clip;
+    without them the frames are read with read_gray, and the pass's held in
+    memory (tests, synthetic clips). `times_s`: capture times in seconds
+    (None when unknown). `native`: the compiled module (passed in, so this
+    controller imports nothing of the add-on's package)."""
     frames = list(frames)
     n = len(frames)
     result = WholeClipResult()
@@ -156,12 +154,11 @@ def estimate(native, scene, camera, frames: Sequence[int],
         if progress is not None and progress(fraction) is False:
             raise Cancelled()
 
-    if stream is None:
-        def stream(fs, near=False):
-            return ((f, read_gray(f)) for f in fs)
-    assert stream is not None
     # The reference frames are decoded ahead while the table is cast.
-    reference_frames = stream([frames[i] for i in spread(n)], True)
+    wanted_reference = [frames[i] for i in spread(n)]
+    reference_frames: Iterable[Tuple[int, Gray]] = (
+        ((f, read_gray(f)) for f in wanted_reference) if stream is None
+        else stream(wanted_reference, True))
     opts = native.SkyEvidenceOptions()
     opts.ignore_top_rows = ignore_top_rows
     sky = native.SkyEvidence(scene, camera, opts)
