@@ -53,6 +53,13 @@ SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
                     kDeg)});
       }
     }
+    // Nearest first: a search within a smaller radius stops at the first
+    // neighbour beyond it.
+    std::sort(cached_[i].begin(), cached_[i].end(),
+              [](const Neighbour& a, const Neighbour& b) {
+                return a.angle_deg < b.angle_deg ||
+                       (a.angle_deg == b.angle_deg && a.index < b.index);
+              });
   });
 }
 
@@ -61,7 +68,8 @@ std::vector<int> SkyGrid::Within(int i, double radius_deg) const {
   const double cos_r = std::cos(std::min(radius_deg, 180.0) * kDeg);
   if (radius_deg <= cached_radius_deg_) {
     for (const Neighbour& nb : cached_[i]) {
-      if (nb.angle_deg <= radius_deg) out.push_back(nb.index);
+      if (nb.angle_deg > radius_deg) break;
+      out.push_back(nb.index);
     }
     return out;
   }

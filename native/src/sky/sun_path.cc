@@ -108,7 +108,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
             } else {
               if (r <= grid.cached_radius_deg()) {
                 for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
-                  if (nb.angle_deg > r) continue;
+                  if (nb.angle_deg > r) break;  // nearest first
                   const double q = nb.angle_deg / r;
                   const double step = in[nb.index] + o.step_weight * q * q;
                   if (step < c) c = step, arg = nb.index;

@@ -53,8 +53,8 @@ class SkyGrid {
   // Indices within radius_deg of direction i (i included), from a cached
   // list when radius_deg <= the cache's radius, else by a scan.
   std::vector<int> Within(int i, double radius_deg) const;
-  // Neighbours within radius_deg of i with their angles (deg), from the
-  // cache (radius_deg must not exceed cached_radius_deg()).
+  // Neighbours within the cache's radius of i with their angles (deg),
+  // nearest first.
   struct Neighbour {
     int index;
     float angle_deg;
