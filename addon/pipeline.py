@@ -430,11 +430,12 @@ def _run_tracked(scene, camera, source, frames, visit, times, options, track, pr
     return track
 
 
-def _finish(native, track, raws, options, times, progress, segments):
+def _finish(native, track, raws, options, times, progress, segments, pixel_scale=1.0):
     """Smooths the raw angles (per segment: smoothing never crosses a jump)
     and fills the track's frames. raws: (frame, zenith, geographic azimuth,
     confidence, reason, native result) in frame order; times: capture times
-    of the run's frames in frame order, or None."""
+    of the run's frames in frame order, or None; pixel_scale: camera pixels
+    per pixel of the native results (a tracker on reduced frames)."""
     _check_progress(progress, 0.97)
     numbers = [r[0] for r in raws]
     north = track.north_offset_deg
@@ -458,8 +459,8 @@ def _finish(native, track, raws, options, times, progress, segments):
                                       confidence=conf, reason=reason,
                                       time_utc=None if times is None else times[k].isoformat())
         if res is not None and res.shadow_end_px[0] == res.shadow_end_px[0]:  # not NaN
-            est.shadow_start_px = list(res.shadow_start_px)
-            est.shadow_end_px = list(res.shadow_end_px)
+            est.shadow_start_px = [(v + 0.5) * pixel_scale - 0.5 for v in res.shadow_start_px]
+            est.shadow_end_px = [(v + 0.5) * pixel_scale - 0.5 for v in res.shadow_end_px]
         if res is not None and z is not None and 0 < res.contrast < 100:
             est.sun_ambient_ratio = res.contrast
         track.frames.append(est)
@@ -603,7 +604,8 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
         track.extra["evidence"] = dict(result.evidence, frames=list(visit))
     if result.jumps:
         track.extra["jumps"] = result.jumps
-    _finish(native, track, raws, options, times, progress, result.segments)
+    _finish(native, track, raws, options, times, progress, result.segments,
+            result.tracker_pixel_scale)
     wait = 0.0 if pass_stream["stream"] is None else pass_stream["stream"].wait_seconds
     pass_stream["stream"] = None
     track.extra["timing"] = dict(result.timing, decode_wait_s=wait,

@@ -44,6 +44,8 @@ REFERENCE_KEEP_BYTES = 256 << 20
 # grid cell that the evidence's ridge along the shadows can leave a few
 # degrees off.
 REFINE_MAX_DEG = 8.0
+# The shadow tracker works on frames at most this wide (larger ones reduced).
+TRACKER_MAX_WIDTH = 1920
 # Confidence of a frame grows with the chosen path's lead over the best path
 # through a direction well away from it on that frame (log-likelihood units,
 # see sun_path.h; the frame's own evidence and its neighbours'): full at this
@@ -88,6 +90,8 @@ class WholeClipResult:
     segments: List[List[int]] = field(default_factory=list)  # frame numbers per segment
     jumps: List[int] = field(default_factory=list)  # frames after an unexplained jump
     anchor: Optional[int] = None   # the best-supported frame (for notes)
+    # Camera pixels per pixel of the tracker's results (shadow ends).
+    tracker_pixel_scale: float = 1.0
     timing: dict = field(default_factory=dict)
     # Per frame (in the order given): the best explained share of the frame's
     # variance and the chosen direction's lead over far rivals.
@@ -189,8 +193,12 @@ def estimate(native, scene, camera, frames: Sequence[int],
     reads = {"count": used_frames}
 
     def read_again(k):
+        """Frame k read again, at the tracker's size."""
         reads["count"] += 1
-        return _frame(read_gray(frames[k]))
+        gray = _frame(read_gray(frames[k]))
+        if gray is None or tracker_camera is camera:
+            return gray
+        return native.resized_gray(gray, tracker_camera.width, tracker_camera.height)
 
     # The pass over the clip, in native code without Python's lock: evidence
     # for every frame, and the tracker following the shadows on the same
@@ -198,8 +206,15 @@ def estimate(native, scene, camera, frames: Sequence[int],
     ok = native.FrameEvidenceStatus.OK
     usable_status = (ok, native.FrameEvidenceStatus.NO_SHADOWS)
     directions = [tuple(d) for d in sky.directions.tolist()]
-    tracker = native.ShadowTracker(scene, camera, list(ground_object_ids),
-                                   ignore_top_rows=ignore_top_rows)
+    # Large frames are tracked reduced (area average) to at most
+    # TRACKER_MAX_WIDTH: its band and ground map grow with the pixels, not
+    # its accuracy (at 4K it took 108 ms a frame and 1.8 GB).
+    factor = -(-camera.width // TRACKER_MAX_WIDTH)
+    tracker_camera = camera if factor == 1 else camera.resized(camera.width // factor,
+                                                               camera.height // factor)
+    result.tracker_pixel_scale = camera.width / tracker_camera.width
+    tracker = native.ShadowTracker(scene, tracker_camera, list(ground_object_ids),
+                                   ignore_top_rows=-(-ignore_top_rows // factor))
     clock = {"tracking": 0.0, "done": 0}
     rest = [f for f in frames if f not in kept]
     if source is None:
@@ -210,7 +225,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     pass_options = native.ClipPassOptions(steer_deg=REFINE_MAX_DEG)
     done = native.run_clip_pass(
         frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
-        [kept.get(f) for f in frames], starts, camera, sky, tracker, pass_options,
+        [kept.get(f) for f in frames], starts, camera, sky, tracker, tracker_camera,
+        pass_options,
         lambda x: progress is None or progress(0.8 * x) is not False)
     del kept, frame_source
     if done["cancelled"]:

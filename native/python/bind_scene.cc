@@ -172,6 +172,8 @@ void BindScene(py::module_& m) {
           "pixels: distortion=PolynomialDistortion and/or its fields as "
           "keyword arguments (focal and principal point required without "
           "it).")
+      .def("resized", &Camera::Resized, py::arg("width"), py::arg("height"),
+           "The same camera for its image resized to width x height.")
       .def_property_readonly(
           "has_distortion",
           [](const Camera& c) { return c.distortion().has_value(); })

@@ -5,6 +5,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cstring>
+
 #include "images.h"
 #include "options.h"
 #include "sunlapse/whole_clip/clip_pass.h"
@@ -34,7 +36,8 @@ void BindWholeClip(py::module_& m) {
       [](FrameSource& source, const std::vector<int>& source_index,
          const py::list& kept, const std::vector<uint8_t>& segment_start,
          const Camera& camera, SkyEvidence& sky, ShadowTracker& tracker,
-         const ClipPassOptions& options, const py::object& progress) {
+         const Camera& tracker_camera, const ClipPassOptions& options,
+         const py::object& progress) {
         std::vector<cv::Mat> mats;
         for (const py::handle& f : kept)
           mats.push_back(GrayArg(py::reinterpret_borrow<py::object>(f)));
@@ -50,7 +53,7 @@ void BindWholeClip(py::module_& m) {
         {
           py::gil_scoped_release release;
           r = RunClipPass(&source, source_index, mats, segment_start, camera,
-                          &sky, &tracker, options, cb);
+                          &sky, &tracker, tracker_camera, options, cb);
         }
         py::dict out;
         out["cancelled"] = r.status == ClipPassResult::Status::kCancelled;
@@ -62,13 +65,29 @@ void BindWholeClip(py::module_& m) {
       },
       py::arg("source"), py::arg("source_index"), py::arg("kept"),
       py::arg("segment_start"), py::arg("camera"), py::arg("sky"),
-      py::arg("tracker"), py::arg("options") = ClipPassOptions(),
-      py::arg("progress") = py::none(),
+      py::arg("tracker"), py::arg("tracker_camera"),
+      py::arg("options") = ClipPassOptions(), py::arg("progress") = py::none(),
       "The pass over a clip without Python's lock: each frame scored against "
       "the sky and followed by the tracker (clip_pass.h). kept[k]: frame k "
       "already read (float32 gray) or None to take the source's next, whose "
       "index must be source_index[k]. progress(fraction) returning False "
       "cancels.");
+
+  m.def(
+      "resized_gray",
+      [](const py::array& frame, int width, int height) -> py::object {
+        const cv::Mat img = FloatView(frame, "frame");
+        cv::Mat out;
+        {
+          py::gil_scoped_release release;
+          out = ResizedGray(img, width, height).clone();
+        }
+        py::array_t<float> a({out.rows, out.cols});
+        std::memcpy(a.mutable_data(), out.data, out.total() * sizeof(float));
+        return a;
+      },
+      py::arg("frame"), py::arg("width"), py::arg("height"),
+      "float32 (H,W) gray resized (area average) to width x height.");
 
   m.def(
       "start_tracker",

@@ -92,6 +92,25 @@ Camera::Camera(const Eigen::Matrix3d& K,
           "K must be invertible");
 }
 
+Camera Camera::Resized(int width, int height) const {
+  Require(width > 0 && height > 0, "width and height must be > 0 pixels");
+  const double sx = static_cast<double>(width) / width_;
+  const double sy = static_cast<double>(height) / height_;
+  // u' = sx u + (sx - 1) / 2: a scale about the corner of the first pixel.
+  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+  S(0, 0) = sx, S(1, 1) = sy;
+  S(0, 2) = 0.5 * (sx - 1.0), S(1, 2) = 0.5 * (sy - 1.0);
+  Camera out(S * K_, cam_from_world_, width, height);
+  if (distortion_) {
+    PolynomialDistortion d = *distortion_;
+    d.focal_x_px *= sx, d.focal_y_px *= sy;
+    d.principal_x_px = sx * d.principal_x_px + 0.5 * (sx - 1.0);
+    d.principal_y_px = sy * d.principal_y_px + 0.5 * (sy - 1.0);
+    out.SetDistortion(d);
+  }
+  return out;
+}
+
 Camera Camera::FromBlender(const BlenderCameraParams& p) {
   p.Check();
   const double W = p.width, H = p.height;

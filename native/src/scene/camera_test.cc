@@ -148,5 +148,23 @@ TEST(Camera, RejectsBadParametersNamingThem) {
   EXPECT_THROW(Camera::FromBlender(p), std::invalid_argument);
 }
 
+TEST(Camera, ResizedMapsPixelsAsOpenCvsResize) {
+  BlenderCameraParams p;
+  p.lens_mm = 28, p.sensor_width_mm = 36, p.sensor_height_mm = 24;
+  p.width = 640, p.height = 480;
+  p.world_from_camera_local(2, 3) = 5.0;  // 5 m up, looking down
+  const Camera cam = Camera::FromBlender(p);
+  const Camera half = cam.Resized(320, 240);
+  EXPECT_EQ(half.width(), 320);
+  for (const Eigen::Vector3d point :
+       {Eigen::Vector3d(0.3, -0.2, 0.0), Eigen::Vector3d(-1.0, 0.7, 1.0)}) {
+    Eigen::Vector2d full, small;
+    ASSERT_TRUE(cam.WorldToPixel(point, &full));
+    ASSERT_TRUE(half.WorldToPixel(point, &small));
+    EXPECT_NEAR(small.x(), (full.x() + 0.5) * 0.5 - 0.5, 1e-9);
+    EXPECT_NEAR(small.y(), (full.y() + 0.5) * 0.5 - 0.5, 1e-9);
+  }
+}
+
 }  // namespace
 }  // namespace sunlapse

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <opencv2/imgproc.hpp>
+
 #include "sunlapse/common/angles.h"
 
 namespace sunlapse {
@@ -15,6 +17,14 @@ void ClipPassOptions::Check() const {
     throw std::invalid_argument("steer_deg must be in (0, 180]");
   if (progress_every < 1)
     throw std::invalid_argument("progress_every must be >= 1");
+}
+
+cv::Mat ResizedGray(const cv::Mat& frame, int width, int height) {
+  if (frame.empty() || (frame.cols == width && frame.rows == height))
+    return frame;
+  cv::Mat out;
+  cv::resize(frame, out, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  return out;
 }
 
 bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
@@ -39,7 +49,7 @@ ClipPassResult RunClipPass(FrameSource* source,
                            const std::vector<cv::Mat>& kept,
                            const std::vector<uint8_t>& segment_start,
                            const Camera& camera, SkyEvidence* sky,
-                           ShadowTracker* tracker,
+                           ShadowTracker* tracker, const Camera& tracker_camera,
                            const ClipPassOptions& options,
                            const std::function<bool(double)>& progress) {
   options.Check();
@@ -92,6 +102,7 @@ ClipPassResult RunClipPass(FrameSource* source,
     if (gray.empty() || (e.status != FrameEvidence::Status::kOk &&
                          e.status != FrameEvidence::Status::kNoShadows))
       continue;
+    gray = ResizedGray(gray, tracker_camera.width(), tracker_camera.height());
     const bool sure = e.status == FrameEvidence::Status::kOk &&
                       e.best_direction >= 0 && e.margin >= options.start_margin;
     if (!following) {

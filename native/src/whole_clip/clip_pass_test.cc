@@ -87,7 +87,7 @@ TEST(ClipPass, ScoresEveryFrameAndFollowsTheSunThroughBrokenFrames) {
   FrameList source(std::move(rest));
   const ClipPassResult r =
       RunClipPass(&source, fx.Indices(), kept, {}, fx.cam, &fx.sky, &fx.tracker,
-                  ClipPassOptions(), nullptr);
+                  fx.cam, ClipPassOptions(), nullptr);
   ASSERT_EQ(r.status, ClipPassResult::Status::kSuccess);
   ASSERT_EQ(r.frames.size(), static_cast<size_t>(fx.n));
   EXPECT_TRUE(r.tracker_started);
@@ -111,13 +111,38 @@ TEST(ClipPass, ScoresEveryFrameAndFollowsTheSunThroughBrokenFrames) {
   EXPECT_EQ(fx.sky.num_frames(), fx.n);
 }
 
+// Large frames are tracked on the frame resized to the tracker's camera.
+TEST(ClipPass, TracksOnFramesResizedToTheTrackersCamera) {
+  Fixture fx;
+  const Camera half = fx.cam.Resized(160, 120);
+  ShadowTracker small(fx.scene, half, [] {
+    ShadowTrackerOptions o;
+    o.ground_object_ids = {0};
+    return o;
+  }());
+  FrameList source = fx.Source(-1, -1);
+  const ClipPassResult r =
+      RunClipPass(&source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam,
+                  &fx.sky, &small, half, ClipPassOptions(), nullptr);
+  int tracked = 0;
+  for (int f = 0; f < fx.n; ++f) {
+    if (!r.frames[f].tracked) continue;
+    ++tracked;
+    EXPECT_LT(AngleBetweenDeg(r.frames[f].track.sun_in_world, PathAt(f, fx.n)),
+              2.0)
+        << "frame " << f;
+  }
+  EXPECT_GE(tracked, fx.n - 2);
+}
+
 TEST(ClipPass, StopsWhenAskedAndRefusesAMismatchedSource) {
   Fixture fx;
   FrameList source = fx.Source(-1, -1);
   int calls = 0;
-  const ClipPassResult r = RunClipPass(
-      &source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam, &fx.sky,
-      &fx.tracker, ClipPassOptions(), [&](double) { return ++calls < 2; });
+  const ClipPassResult r =
+      RunClipPass(&source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam,
+                  &fx.sky, &fx.tracker, fx.cam, ClipPassOptions(),
+                  [&](double) { return ++calls < 2; });
   EXPECT_EQ(r.status, ClipPassResult::Status::kCancelled);
   EXPECT_LT(r.frames.size(), static_cast<size_t>(fx.n));
   FrameList other = fx.Source(-1, -1);
@@ -125,7 +150,7 @@ TEST(ClipPass, StopsWhenAskedAndRefusesAMismatchedSource) {
   shifted[0] = 5;
   EXPECT_THROW(
       RunClipPass(&other, shifted, std::vector<cv::Mat>(fx.n), {}, fx.cam,
-                  &fx.sky, &fx.tracker, ClipPassOptions(), nullptr),
+                  &fx.sky, &fx.tracker, fx.cam, ClipPassOptions(), nullptr),
       std::runtime_error);
 }
 

@@ -78,6 +78,10 @@ class Camera {
     return distortion_;
   }
 
+  // The same camera for its image resized to width x height (OpenCV's
+  // resize: pixel centres scale about the image's corner, u' = (u + 0.5) *
+  // width' / width - 0.5).
+  Camera Resized(int width, int height) const;
   const Eigen::Matrix3d& K() const { return K_; }
   const Eigen::Isometry3d& cam_from_world() const { return cam_from_world_; }
   Eigen::Vector3d center_in_world() const;

@@ -58,6 +58,10 @@ struct ClipPassResult {
 // the frame under the Sun it is given; the grid cell's shadows are a little
 // off). Returns whether it started; *refined gets its Sun on the frame when
 // within refine_max_deg of the direction (else ok=false).
+// `frame` resized (area average) to width x height, or itself when it has
+// that size.
+cv::Mat ResizedGray(const cv::Mat& frame, int width, int height);
+
 bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
                   const Eigen::Vector3d& sun_in_world, double refine_max_deg,
                   TrackedFrame* refined);
@@ -67,13 +71,15 @@ bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
 // index source_index[k]. segment_start[k] = 1 where the clip is known to
 // jump (capture times going back): the tracker starts again after it.
 // progress(fraction) returning false cancels. The camera gives the size
-// every frame must have.
+// every frame must have; the tracker may work on the frames resized to
+// tracker_camera's size (area average), as large frames need no more pixels
+// for it.
 ClipPassResult RunClipPass(FrameSource* source,
                            const std::vector<int>& source_index,
                            const std::vector<cv::Mat>& kept,
                            const std::vector<uint8_t>& segment_start,
                            const Camera& camera, SkyEvidence* sky,
-                           ShadowTracker* tracker,
+                           ShadowTracker* tracker, const Camera& tracker_camera,
                            const ClipPassOptions& options,
                            const std::function<bool(double)>& progress);
 
