@@ -233,6 +233,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         raise Cancelled()
     reads["count"] += len(rest)
     clock["tracking"] += done["tracking_seconds"]
+    clock["start"] = done["start_seconds"]
     started = {"any": done["tracker_started"]}
     status = [p.evidence.status for p in done["frames"]]
     reasons = [p.read_message or p.evidence.message or None for p in done["frames"]]
@@ -396,6 +397,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     result.timing = {"table_s": t_table, "reference_s": t_setup - t_table,
                      "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
                      "tracking_ms_per_frame": 1000.0 * clock["tracking"] / max(1, n),
+                     "tracker_start_s": clock["start"],
                      "check_s": t_checked - t_evidence,
                      "frames_read": reads["count"], "frames": n,
                      "total_s": t_end, "samples": sky.num_samples,

@@ -60,6 +60,7 @@ void BindWholeClip(py::module_& m) {
         out["frames"] = py::cast(std::move(r.frames));
         out["tracker_started"] = r.tracker_started;
         out["tracking_seconds"] = r.tracking_seconds;
+        out["start_seconds"] = r.start_seconds;
         out["seconds"] = r.seconds;
         return out;
       },

@@ -107,9 +107,13 @@ ClipPassResult RunClipPass(FrameSource* source,
                       e.best_direction >= 0 && e.margin >= options.start_margin;
     if (!following) {
       if (sure) {
+        const auto start = std::chrono::steady_clock::now();
         following =
             StartTracker(tracker, gray, grid.direction(e.best_direction),
                          options.steer_deg, &pf.track);
+        out.start_seconds += std::chrono::duration<double>(
+                                 std::chrono::steady_clock::now() - start)
+                                 .count();
         pf.tracked = following && pf.track.ok;
         out.tracker_started = out.tracker_started || following;
         out.tracking_seconds += pf.track.seconds;

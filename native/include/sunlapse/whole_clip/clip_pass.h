@@ -50,6 +50,7 @@ struct ClipPassResult {
   std::vector<ClipPassFrame> frames;
   bool tracker_started = false;  // on some frame of the pass
   double tracking_seconds = 0.0;
+  double start_seconds = 0.0;  // starting the tracker (its ground map, ...)
   double seconds = 0.0;
 };
 
