@@ -13,6 +13,11 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 
+# Two-pass local smoothing takes at most this many frames' span on either
+# side of a frame (see two_pass_local_directions).
+MAX_HALF_WINDOW_FRAMES = 64
+
+
 def _arrays(frames, values, weights):
     t = np.asarray(frames, dtype=float)
     v = np.array([np.nan if x is None else float(x) for x in values], dtype=float)
@@ -259,14 +264,23 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
     span = float(np.ptp(t[good]))
     if half_window is None:
         step = span / max(1, int(good.sum()) - 1)
-        half_window = max(span / 8.0, 6.5 * step)
+        # On long clips an eighth of the span holds thousands of frames: at
+        # most MAX_HALF_WINDOW_FRAMES on a side average the noise as well.
+        half_window = min(max(span / 8.0, 6.5 * step), MAX_HALF_WINDOW_FRAMES * step)
     half_window = max(float(half_window), 1e-9)
     robust = np.ones(n)
     fitted = np.zeros((n, 3))
+    # Each frame's neighbours within the window, by sorted time (only they
+    # have kernel weight; the fits cost the window, not the clip).
+    order = np.argsort(t, kind="stable")
+    ts = t[order]
+    lo = np.searchsorted(ts, t - half_window, side="right")
+    hi = np.searchsorted(ts, t + half_window, side="left")
     for _ in range(iterations):
         for i in range(n):
-            d = (t - t[i]) / half_window
-            kern = np.where(np.abs(d) < 1.0, (1.0 - np.abs(d) ** 3) ** 3, 0.0) * w * robust
+            near = order[lo[i]:hi[i]]
+            d = (t[near] - t[i]) / half_window
+            kern = (1.0 - np.abs(d) ** 3) ** 3 * w[near] * robust[near]
             sel = kern > 0
             if not sel.any():  # no measured neighbour: the nearest measured frame
                 j = int(np.flatnonzero(good)[np.argmin(np.abs(t[good] - t[i]))])
@@ -281,7 +295,7 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
             degree = min(2 if (m >= 6 and sides >= 3) else (1 if m >= 3 else 0), distinct - 1)
             x = np.vander(d[sel], degree + 1, increasing=True)
             sw = np.sqrt(kern[sel])[:, None]
-            coef = np.linalg.lstsq(x * sw, raw[sel] * sw, rcond=None)[0]
+            coef = np.linalg.lstsq(x * sw, raw[near][sel] * sw, rcond=None)[0]
             fitted[i] = coef[0]  # the value at d = 0
         fitted /= np.maximum(np.linalg.norm(fitted, axis=1, keepdims=True), 1e-12)
         cross = np.linalg.norm(np.cross(raw, fitted), axis=1)
