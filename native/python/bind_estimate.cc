@@ -41,6 +41,20 @@ py::array MatAsArray(cv::Mat m) {
   return py::array_t<uint8_t>(shape, held->data, owner);
 }
 
+// The reader's next frame (BGR or gray) as numpy; None for a frame that
+// cannot be decoded; StopIteration at the end.
+py::object NextFrame(VideoReader& r, bool gray) {
+  cv::Mat image;
+  bool more;
+  {
+    py::gil_scoped_release release;
+    more = gray ? r.ReadGray(&image) : r.Read(&image);
+  }
+  if (!more) throw py::stop_iteration();
+  if (image.empty()) return py::none();
+  return MatAsArray(std::move(image));
+}
+
 // A progress callable from Python: (fraction) -> bool|None; None = go on.
 ProgressCallback WrapProgress(const py::object& fn) {
   if (fn.is_none()) return nullptr;
@@ -294,33 +308,11 @@ void BindEstimate(py::module_& m) {
            "Counts a movie's frames in the file (no decoding); num_frames is "
            "exact after.")
       .def(
-          "read",
-          [](VideoReader& r) -> py::object {
-            cv::Mat bgr;
-            bool more;
-            {
-              py::gil_scoped_release release;
-              more = r.Read(&bgr);
-            }
-            if (!more) throw py::stop_iteration();
-            if (bgr.empty()) return py::none();
-            return MatToArray(bgr);
-          },
+          "read", [](VideoReader& r) { return NextFrame(r, false); },
           "Next frame as uint8 (H,W,3) BGR; None for a frame that cannot be "
           "decoded; raises StopIteration at the end.")
       .def(
-          "read_gray",
-          [](VideoReader& r) -> py::object {
-            cv::Mat gray;
-            bool more;
-            {
-              py::gil_scoped_release release;
-              more = r.ReadGray(&gray);
-            }
-            if (!more) throw py::stop_iteration();
-            if (gray.empty()) return py::none();
-            return MatAsArray(gray);
-          },
+          "read_gray", [](VideoReader& r) { return NextFrame(r, true); },
           "Next frame as uint8 (H,W) gray (the luma as decoded, no colour "
           "conversion); None for a frame that cannot be decoded; raises "
           "StopIteration at the end.")

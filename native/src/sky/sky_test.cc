@@ -22,22 +22,6 @@ Eigen::Vector3d PathAt(int f, int n) {
   return Sun(55 - 20 * t, 110 + 50 * t);
 }
 
-testing::RenderOptions Textured(uint32_t seed) {
-  testing::RenderOptions o;
-  o.noise = 0.01;
-  o.seed = seed;
-  o.ambient = 0.15;
-  o.albedo = [](int id, const Eigen::Vector3f& p) {
-    if (id != 0) return 0.5;
-    const int tiles = (static_cast<int>(std::floor(p.x() * 2)) +
-                       static_cast<int>(std::floor(p.y() * 2))) &
-                      1;
-    return 0.3 + 0.08 * tiles +
-           0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
-  };
-  return o;
-}
-
 // The ground 30% brighter far from the camera than near it (view-dependent
 // reflection, vignetting): no shadow, and it must not be taken for one.
 cv::Mat WithGradient(cv::Mat f) {
@@ -56,8 +40,8 @@ struct Clip {
   explicit Clip(int n, bool gradient = true) {
     for (int f = 0; f < n; ++f) {
       truth.push_back(PathAt(f, n));
-      cv::Mat img =
-          testing::RenderLambertian(scene, cam, truth.back(), Textured(f + 1));
+      cv::Mat img = testing::RenderLambertian(scene, cam, truth.back(),
+                                              testing::TexturedGround(f + 1));
       frames.push_back(gradient ? WithGradient(img) : img);
     }
   }
@@ -94,7 +78,7 @@ TEST(SkyEvidence, ShadowlessFrameWithAGradientExplainsNothing) {
   SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
   ev.SetReference(clip.frames);
   // An overcast frame: ambient light only, the same gradient.
-  testing::RenderOptions o = Textured(99);
+  testing::RenderOptions o = testing::TexturedGround(99);
   o.sun = 0.0;
   o.ambient = 0.6;
   const cv::Mat overcast = WithGradient(

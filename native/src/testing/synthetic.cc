@@ -66,6 +66,22 @@ Camera LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
   return Camera::FromBlender(p);
 }
 
+RenderOptions TexturedGround(uint32_t seed) {
+  RenderOptions o;
+  o.noise = 0.01;
+  o.seed = seed;
+  o.ambient = 0.15;
+  o.albedo = [](int id, const Eigen::Vector3f& p) {
+    if (id != 0) return 0.5;
+    const int tiles = (static_cast<int>(std::floor(p.x() * 2)) +
+                       static_cast<int>(std::floor(p.y() * 2))) &
+                      1;
+    return 0.3 + 0.08 * tiles +
+           0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
+  };
+  return o;
+}
+
 cv::Mat RenderLambertian(const Scene& scene, const Camera& cam,
                          const Eigen::Vector3d& sun, const RenderOptions& o) {
   if (o.supersample > 1) {

@@ -51,6 +51,10 @@ struct RenderOptions {
       [](int, const Eigen::Vector3f&) { return 0.5; };
 };
 
+// A tiled, gently varying ground (object 0; the others 0.5) under 1% noise
+// and 15% ambient light, like real paving.
+RenderOptions TexturedGround(uint32_t seed);
+
 // I = albedo (ambient + sun max(0, N.L) visible) + noise, clamped to [0, 1];
 // CV_32F of the camera's size.
 cv::Mat RenderLambertian(const Scene& scene, const Camera& camera,

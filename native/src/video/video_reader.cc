@@ -193,6 +193,17 @@ struct VideoReader::Movie {
       false;  // decoder.frame() is frame `position_`, not yet returned
   double frame_seconds = 0.0;
 
+  // The stream time stamp of 0-based frame `index` (in double, clamped: a
+  // corrupt time base or rate must not overflow); first_pts when there is
+  // none.
+  int64_t TimestampOf(int index) const {
+    const double ticks =
+        static_cast<double>(first_pts) +
+        index * frame_seconds / av_q2d(decoder.stream()->time_base);
+    return std::isfinite(ticks) && std::fabs(ticks) < 9e18 ? std::llround(ticks)
+                                                           : first_pts;
+  }
+
   // 0-based frame index of decoder.frame(), from its time stamp.
   int64_t IndexOfFrame() const {
     const int64_t pts = decoder.frame()->best_effort_timestamp;
@@ -447,13 +458,7 @@ bool VideoReader::Seek(int index) {
   }
   // To the key frame at or before the target, then decode up to it; the
   // frames' time stamps say where we are.
-  const AVStream* st = mv.decoder.stream();
-  // In double, clamped: a corrupt time base or rate must not overflow.
-  const double ticks = static_cast<double>(mv.first_pts) +
-                       index * mv.frame_seconds / av_q2d(st->time_base);
-  const int64_t target = std::isfinite(ticks) && std::fabs(ticks) < 9e18
-                             ? std::llround(ticks)
-                             : mv.first_pts;
+  const int64_t target = mv.TimestampOf(index);
   mv.pending = false;
   if (mv.decoder.SeekTo(target)) {
     int64_t at = -1;
@@ -491,19 +496,16 @@ int VideoReader::KeyFrameAtOrBefore(int index) const {
   if (index < 0 || (num_frames_ > 0 && index >= num_frames_)) return -1;
   if (is_sequence_) return index;
   const Movie& mv = *movie_;
+  if (mv.frame_seconds <= 0.0) return -1;
   AVStream* st = mv.decoder.stream();
-  const double ticks = static_cast<double>(mv.first_pts) +
-                       index * mv.frame_seconds / av_q2d(st->time_base);
-  if (!std::isfinite(ticks) || std::fabs(ticks) >= 9e18 ||
-      mv.frame_seconds <= 0.0)
-    return -1;
+  const int64_t ticks = mv.TimestampOf(index);
   // The index holds decoding time stamps: with B-frames they run ahead of
   // the presentation ones by the first entry's lag behind frame 0.
   const AVIndexEntry* first = avformat_index_get_entry(st, 0);
   if (first == nullptr) return -1;
   const int64_t lag = mv.first_pts - first->timestamp;
   const AVIndexEntry* e = avformat_index_get_entry_from_timestamp(
-      st, std::llround(ticks) - lag, AVSEEK_FLAG_BACKWARD);
+      st, ticks - lag, AVSEEK_FLAG_BACKWARD);
   if (e == nullptr || !(e->flags & AVINDEX_KEYFRAME)) return -1;
   const double at = (static_cast<double>(e->timestamp) + lag - mv.first_pts) *
                     av_q2d(st->time_base) / mv.frame_seconds;
@@ -520,12 +522,7 @@ int VideoReader::SeekNear(int index) {
   // The key frame at or before the target costs one decode; frames after it
   // would cost one each.
   Movie& mv = *movie_;
-  const AVStream* st = mv.decoder.stream();
-  const double ticks = static_cast<double>(mv.first_pts) +
-                       index * mv.frame_seconds / av_q2d(st->time_base);
-  const int64_t target = std::isfinite(ticks) && std::fabs(ticks) < 9e18
-                             ? std::llround(ticks)
-                             : mv.first_pts;
+  const int64_t target = mv.TimestampOf(index);
   mv.pending = false;
   if (mv.decoder.SeekTo(target)) {
     int err;

@@ -11,23 +11,6 @@
 namespace sunlapse {
 namespace {
 
-// A textured ground under noise, like real paving.
-testing::RenderOptions Textured(uint32_t seed) {
-  testing::RenderOptions o;
-  o.noise = 0.01;
-  o.seed = seed;
-  o.ambient = 0.15;
-  o.albedo = [](int id, const Eigen::Vector3f& p) {
-    if (id != 0) return 0.5;
-    const int tiles = (static_cast<int>(std::floor(p.x() * 2)) +
-                       static_cast<int>(std::floor(p.y() * 2))) &
-                      1;
-    return 0.3 + 0.08 * tiles +
-           0.04 * std::sin(7.3 * p.x()) * std::cos(5.1 * p.y());
-  };
-  return o;
-}
-
 Eigen::Vector3d PathAt(int f, int n) {
   const double t = static_cast<double>(f) / (n - 1);
   return SunInWorldFromAngles(55 - 20 * t, 110 + 50 * t);
@@ -46,8 +29,8 @@ struct Fixture {
                         }()};
   Fixture() {
     for (int f = 0; f < n; ++f)
-      frames.push_back(
-          testing::RenderLambertian(scene, cam, PathAt(f, n), Textured(f + 1)));
+      frames.push_back(testing::RenderLambertian(
+          scene, cam, PathAt(f, n), testing::TexturedGround(f + 1)));
     sky.SetReference({frames[0], frames[5], frames[10], frames[15]});
   }
   // The frames as a source; frame `broken` undecodable, `small` too small.
