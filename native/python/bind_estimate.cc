@@ -10,6 +10,7 @@
 #include "arrays.h"
 #include "images.h"
 #include "options.h"
+#include "progress.h"
 #include "sunlapse/initial/initial_sun.h"
 #include "sunlapse/tracking/shadow_tracker.h"
 #include "sunlapse/tracking/thesis_tracker.h"
@@ -53,16 +54,6 @@ py::object NextFrame(VideoReader& r, bool gray) {
   if (!more) throw py::stop_iteration();
   if (image.empty()) return py::none();
   return MatAsArray(std::move(image));
-}
-
-// A progress callable from Python: (fraction) -> bool|None; None = go on.
-ProgressCallback WrapProgress(const py::object& fn) {
-  if (fn.is_none()) return nullptr;
-  return [fn](double fraction) {
-    py::gil_scoped_acquire gil;
-    const py::object r = fn(fraction);
-    return r.is_none() || r.cast<bool>();
-  };
 }
 
 InitialSunMethod ParseMethod(const std::string& m) {

@@ -9,6 +9,7 @@
 
 #include "images.h"
 #include "options.h"
+#include "progress.h"
 #include "sunlapse/whole_clip/clip_pass.h"
 
 namespace sunlapse::python {
@@ -41,14 +42,7 @@ void BindWholeClip(py::module_& m) {
         std::vector<cv::Mat> mats;
         for (const py::handle& f : kept)
           mats.push_back(GrayArg(py::reinterpret_borrow<py::object>(f)));
-        std::function<bool(double)> cb;
-        if (!progress.is_none()) {
-          cb = [progress](double fraction) {
-            py::gil_scoped_acquire gil;
-            const py::object r = progress(fraction);
-            return r.is_none() || r.cast<bool>();
-          };
-        }
+        const std::function<bool(double)> cb = WrapProgress(progress);
         ClipPassResult r;
         {
           py::gil_scoped_release release;
