@@ -501,6 +501,47 @@ def _wrong_size(image, camera) -> Optional[str]:
     return None
 
 
+# A frame's Sun further than this from the Sun's circle about the pole,
+# fitted to its segment's confident frames, keeps at most half its
+# confidence: on the randomised suite 15 of the 18 raw Suns more than 5 deg
+# off at confidence >= 0.8 were over 3 deg from it, and 7 of the 759 good
+# ones. The sky's evidence can be confidently wrong over a few frames (a
+# pole's shadow along a paving joint); the Sun's path over the segment
+# cannot bend that way.
+CIRCLE_DOUBT_DEG = 3.0
+CIRCLE_MIN_FRAMES = 8
+
+
+def _doubt_off_circle(raws, segments, frames, times, north):
+    """raws (frame, zenith, geographic azimuth, confidence, reason, result)
+    with the confidence halved where the Sun is off its segment's circle."""
+    index = {f: k for k, f in enumerate(frames)}
+    seconds = None if times is None else frametimes.seconds_since(times)
+    out = list(raws)
+    for seg in segments:
+        ks = sorted(index[f] for f in seg)
+        use = [k for k in ks if out[k][1] is not None and out[k][3] >= 0.3]
+        if len(use) < CIRCLE_MIN_FRAMES:
+            continue
+        t = [float(frames[k]) if seconds is None else seconds[k] for k in ks]
+        fit = suncircle.fit_circle(
+            t, [out[k][1] if k in use else None for k in ks],
+            [angles.azimuth_world_from_geographic(out[k][2], north) if k in use else None
+             for k in ks],
+            [max(out[k][3], 1e-3) for k in ks], times_are_seconds=seconds is not None)
+        if not fit.success:
+            continue
+        for i, k in enumerate(ks):
+            f, z, a, conf, reason, res = out[k]
+            if z is None:
+                continue
+            raw = angles.sun_in_world_from_geographic(z, a, north)
+            fitted = angles.sun_in_world_from_angles(fit.zenith_deg[i], fit.azimuth_world_deg[i])
+            if angles.angle_between_deg(raw, fitted) > CIRCLE_DOUBT_DEG:
+                out[k] = (f, z, a, min(conf, 0.5 * conf), reason, res)
+    return out
+
+
 def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, options, track,
                     progress, t0):
     """The default method: the Sun over the whole clip at once
@@ -582,6 +623,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
         z, a_world = angles.angles_from_sun_in_world(r.sun_in_world)
         geographic[f] = (float(z), float(angles.azimuth_geographic_from_world(a_world, north)))
         raws.append((f, *geographic[f], r.confidence, r.reason, r.tracked))
+    raws = _doubt_off_circle(raws, result.segments, frames, times, north)
     if result.anchor is not None:
         a = by_frame[result.anchor]
         track.initial = {"frame": a.frame, "zenith_deg": geographic[a.frame][0],

@@ -205,3 +205,32 @@ def test_a_clean_clip_is_read_once_and_followed_on_every_frame(world):
     for k, r in enumerate(result.frames):
         assert r.refined, (k, r.reason)
         assert error_deg(r.sun_in_world, truth[k]) < 1.0, k
+
+
+def test_suns_off_their_circle_keep_half_their_confidence():
+    """The Sun's path over a segment is a small circle about the pole: raw
+    Suns far off the circle fitted to the segment lose their confidence
+    (pipeline._doubt_off_circle); the others keep it."""
+    import datetime as dt
+    lat, dec = math.radians(40.0), math.radians(12.0)
+    pole = np.array([0.0, math.cos(lat), math.sin(lat)])  # north is +Y
+    e1 = np.cross(pole, [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(pole, e1)
+    t0 = dt.datetime(2025, 6, 1, 8, 0, tzinfo=dt.timezone.utc)
+    frames = list(range(1, 41))
+    times = [t0 + dt.timedelta(minutes=6 * k) for k in range(40)]
+    off = {7: 8.0, 20: 6.0, 33: 10.0}
+    raws = []
+    for k, f in enumerate(frames):
+        h = math.radians(-60.0 + 1.5 * k)  # 15 deg an hour
+        sun = math.cos(dec) * (math.cos(h) * e1 + math.sin(h) * e2) + math.sin(dec) * pole
+        z, a = angles.angles_from_sun_in_world(sun)
+        z = float(z) + off.get(f, 0.0)
+        raws.append((f, z, float(a) % 360.0, 0.95, None, None))
+    out = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
+    for (f, *_, conf, _r, _x), before in zip(out, raws):
+        if f in off:
+            assert conf == pytest.approx(0.475), f
+        else:
+            assert conf == before[3], f
