@@ -502,19 +502,20 @@ def _wrong_size(image, camera) -> Optional[str]:
 
 
 # A frame's Sun further than this from the Sun's circle about the pole,
-# fitted to its segment's confident frames, keeps at most half its
-# confidence: on the randomised suite 15 of the 18 raw Suns more than 5 deg
-# off at confidence >= 0.8 were over 3 deg from it, and 7 of the 759 good
-# ones. The sky's evidence can be confidently wrong over a few frames (a
-# pole's shadow along a paving joint); the Sun's path over the segment
-# cannot bend that way.
+# fitted to its segment's confident frames, loses confidence with the square
+# of the ratio (half at 4.2 deg, a tenth at 9.5): on the randomised suite 15
+# of the 18 raw Suns more than 5 deg off at confidence >= 0.8 were over
+# 3 deg from it, and 7 of the 759 good ones. The sky's evidence can be
+# confidently wrong over a few frames (a pole's shadow along a paving
+# joint); the Sun's path over the segment cannot bend that way, and a Sun
+# far off it must not steer the smoothing either.
 CIRCLE_DOUBT_DEG = 3.0
 CIRCLE_MIN_FRAMES = 8
 
 
 def _doubt_off_circle(raws, segments, frames, times, north):
     """raws (frame, zenith, geographic azimuth, confidence, reason, result)
-    with the confidence halved where the Sun is off its segment's circle."""
+    with less confidence where the Sun is off its segment's circle."""
     index = {f: k for k, f in enumerate(frames)}
     seconds = None if times is None else frametimes.seconds_since(times)
     out = list(raws)
@@ -537,8 +538,9 @@ def _doubt_off_circle(raws, segments, frames, times, north):
                 continue
             raw = angles.sun_in_world_from_geographic(z, a, north)
             fitted = angles.sun_in_world_from_angles(fit.zenith_deg[i], fit.azimuth_world_deg[i])
-            if angles.angle_between_deg(raw, fitted) > CIRCLE_DOUBT_DEG:
-                out[k] = (f, z, a, min(conf, 0.5 * conf), reason, res)
+            off = angles.angle_between_deg(raw, fitted)
+            if off > CIRCLE_DOUBT_DEG:
+                out[k] = (f, z, a, conf * (CIRCLE_DOUBT_DEG / off) ** 2, reason, res)
     return out
 
 
