@@ -239,7 +239,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     reads["count"] += len(rest)
     clock["tracking"] += done["tracking_seconds"]
     clock["start"] = done["start_seconds"]
-    started = {"any": done["tracker_started"]}
+    tracker_started = done["tracker_started"]
     status = [p.evidence.status for p in done["frames"]]
     reasons = [p.read_message or p.evidence.message or None for p in done["frames"]]
     tracked: List[object] = [p.track for p in done["frames"]]
@@ -280,8 +280,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     # Each segment against the path, forward from its first measured frame,
     # then back from it to the frames before. A frame the pass tracked to a
     # Sun near the path keeps it; the others are read again and refined
-    # around the path's direction, by a tracker started again on the
-    # segment's first measured frame.
+    # around the path's direction by the pass's tracker (or, where it never
+    # started, one started on the segment's first measured frame).
     raws: List[RawFrame] = []
     before, after = [0] * n, [0] * n  # nearest measured frames, in a segment's span
     where = {"run": None, "last": None}  # the tracker's run and its last frame
@@ -296,7 +296,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         """A tracker for the frames read again: the pass's own, or, when it
         never started there, one started on frame `first` under the path's
         Sun, once per run (segment, direction)."""
-        if where["run"] == run or started["any"]:
+        if where["run"] == run or tracker_started:
             where["run"] = run
             return True
         gray = read_again(first)
