@@ -21,27 +21,6 @@
 namespace sunlapse::python {
 namespace {
 
-py::array_t<uint8_t> MatToArray(const cv::Mat& m) {
-  const cv::Mat c = m.isContinuous() ? m : m.clone();
-  py::array_t<uint8_t> out({c.rows, c.cols, c.channels()});
-  std::memcpy(out.mutable_data(), c.data, c.total() * c.elemSize());
-  return out;
-}
-
-// A numpy array owning `m` (no copy): the Mat's buffer lives as long as the
-// array.
-py::array MatAsArray(cv::Mat m) {
-  if (!m.isContinuous()) m = m.clone();
-  auto* held = new cv::Mat(std::move(m));
-  py::capsule owner(held, [](void* p) { delete static_cast<cv::Mat*>(p); });
-  std::vector<py::ssize_t> shape{held->rows, held->cols};
-  if (held->channels() > 1) shape.push_back(held->channels());
-  if (held->depth() == CV_32F)
-    return py::array_t<float>(shape, reinterpret_cast<float*>(held->data),
-                              owner);
-  return py::array_t<uint8_t>(shape, held->data, owner);
-}
-
 // The reader's next frame (BGR or gray) as numpy; None for a frame that
 // cannot be decoded; StopIteration at the end.
 py::object NextFrame(VideoReader& r, bool gray) {
@@ -454,10 +433,7 @@ void BindEstimate(py::module_& m) {
         const cv::Mat in(static_cast<int>(bgr.shape(0)),
                          static_cast<int>(bgr.shape(1)), CV_8UC3,
                          const_cast<void*>(bgr.data()));
-        const cv::Mat g = ToLinearGray(in, gamma);
-        py::array_t<float> out({g.rows, g.cols});
-        std::memcpy(out.mutable_data(), g.data, g.total() * sizeof(float));
-        return out;
+        return MatAsArray(ToLinearGray(in, gamma));
       },
       py::arg("image").noconvert(), py::arg("gamma") = 2.2,
       "uint8 (H,W,3) BGR -> float32 (H,W) linear gray in [0,1] (value^gamma).");

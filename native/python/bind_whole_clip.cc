@@ -5,8 +5,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <cstring>
-
 #include "images.h"
 #include "options.h"
 #include "progress.h"
@@ -75,11 +73,11 @@ void BindWholeClip(py::module_& m) {
         cv::Mat out;
         {
           py::gil_scoped_release release;
+          // A copy even at the same size: the result must not share the
+          // caller's array.
           out = ResizedGray(img, width, height).clone();
         }
-        py::array_t<float> a({out.rows, out.cols});
-        std::memcpy(a.mutable_data(), out.data, out.total() * sizeof(float));
-        return a;
+        return MatAsArray(std::move(out));
       },
       py::arg("frame"), py::arg("width"), py::arg("height"),
       "float32 (H,W) gray resized (area average) to width x height.");

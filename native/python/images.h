@@ -1,6 +1,10 @@
-// numpy images seen as cv::Mat without copies, for the bindings of every
-// stage that takes frames.
+// numpy images seen as cv::Mat without copies, and cv::Mat handed to
+// numpy without copies, for the bindings of every stage that takes or gives
+// frames.
 #pragma once
+
+#include <utility>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -31,6 +35,20 @@ inline cv::Mat MaskView(const py::array& a, const char* name) {
 inline cv::Mat GrayArg(const py::object& frame) {
   if (frame.is_none()) return {};
   return FloatView(frame.cast<py::array>(), "frame");
+}
+
+// A numpy array owning `m` (no copy): the Mat's buffer lives as long as the
+// array.
+inline py::array MatAsArray(cv::Mat m) {
+  if (!m.isContinuous()) m = m.clone();
+  auto* held = new cv::Mat(std::move(m));
+  py::capsule owner(held, [](void* p) { delete static_cast<cv::Mat*>(p); });
+  std::vector<py::ssize_t> shape{held->rows, held->cols};
+  if (held->channels() > 1) shape.push_back(held->channels());
+  if (held->depth() == CV_32F)
+    return py::array_t<float>(shape, reinterpret_cast<float*>(held->data),
+                              owner);
+  return py::array_t<uint8_t>(shape, held->data, owner);
 }
 
 }  // namespace sunlapse::python
