@@ -102,7 +102,7 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
     tw, ww = t[ok], w[ok]
     # Start: the plane through the measured Suns; its normal is the pole.
     centre = (s * ww[:, None]).sum(0) / ww.sum()
-    _, _, vt = np.linalg.svd((s - centre) * np.sqrt(ww)[:, None])
+    _, _, vt = np.linalg.svd((s - centre) * np.sqrt(ww)[:, None], full_matrices=False)
     p = vt[2]
     steps = np.cross(s[:-1], s[1:]) @ p
     # The Sun turns westward: clockwise about the north celestial pole.
