@@ -564,24 +564,32 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
             return source.why_not()
         return _wrong_size(bgr, camera) or native.to_linear_gray(bgr, GAMMA[options.method])
 
-    def open_stream(fs, near):
+    # The frames stream reduced to the estimate's working size: a clip of
+    # another size than the camera's would be reduced to it silently.
+    decoded = (source.reader.width, source.reader.height)
+    if decoded != (camera.width, camera.height):
+        raise PipelineError(f"clip frames are {decoded[0]}x{decoded[1]} but the camera "
+                            f"expects {camera.width}x{camera.height}: set the scene's "
+                            "resolution to the clip's")
+
+    def open_stream(fs, near, size):
         try:
             return native.FrameStream(
                 clip_path, [f - source.start for f in fs],
                 native.FrameStreamOptions(gamma=GAMMA[options.method], near=near,
-                                          keep_bgr=near))
+                                          keep_bgr=near, width=size[0], height=size[1]))
         except ValueError as e:
             raise PipelineError(f"cannot read the clip: {e}")
 
-    def stream(fs, near):
-        """The frames in order, decoded ahead on a native thread (started
-        now, before the first is asked for)."""
-        return streamed(open_stream(fs, near), near)
+    def stream(fs, near, size):
+        """The frames in order at `size`, decoded ahead on a native thread
+        (started now, before the first is asked for)."""
+        return streamed(open_stream(fs, near, size), near)
 
-    def frame_source(fs):
-        """The pass's frames: a native stream, and the index it reports for
-        each frame (its 0-based index in the clip)."""
-        pass_stream["stream"] = open_stream(fs, False)
+    def frame_source(fs, size):
+        """The pass's frames at `size`: a native stream, and the index it
+        reports for each frame (its 0-based index in the clip)."""
+        pass_stream["stream"] = open_stream(fs, False, size)
         return pass_stream["stream"], {f: f - source.start for f in fs}
 
     def streamed(frame_stream, near):
@@ -590,10 +598,9 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
         for got in frame_stream:
             f = got.index + start
             if got.gray is not None:
-                why = _wrong_size(got.gray, camera)
-                if near and why is None:
+                if near:
                     samples[f] = got.bgr[::stride, ::stride].copy() if stride > 1 else got.bgr
-                yield f, why or got.gray
+                yield f, got.gray
             elif got.status == past_end:
                 yield f, "the clip ended before this frame"
             else:

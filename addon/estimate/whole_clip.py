@@ -44,12 +44,23 @@ REFERENCE_KEEP_BYTES = 256 << 20
 # grid cell that the evidence's ridge along the shadows can leave a few
 # degrees off.
 REFINE_MAX_DEG = 8.0
-# The shadow tracker works on frames at most this wide (larger ones reduced,
-# one ray a pixel: a reduced pixel is already the average the sub-pixel
-# rays model). At 1080p the plaza's raw Suns are as good (0.16 deg mean,
-# 0.50 max against 0.16 and 0.70 at full size) and starting the tracker
-# costs 0.15 s instead of 0.58.
-TRACKER_MAX_WIDTH = 1280
+# The estimate works on frames at most this wide: larger ones are reduced
+# (area average, by a power of two) as they are decoded, before they are
+# made linear, and both the sky's evidence and the shadow tracker see them
+# at that size (one ray a pixel: a reduced pixel is already the average the
+# sub-pixel rays model). The tracker's band and ground map grow with the
+# pixels, not its accuracy.
+WORKING_MAX_WIDTH = 1280
+
+
+def working_factor(width: int) -> int:
+    """The power of two a frame `width` wide is divided by to be at most
+    WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
+    factor = 1
+    while width > factor * WORKING_MAX_WIDTH:
+        factor *= 2
+    return factor
+
 # Confidence of a frame grows with the chosen path's lead over the best path
 # through a direction well away from it on that frame (log-likelihood units,
 # see sun_path.h; the frame's own evidence and its neighbours'): full at this
@@ -143,11 +154,12 @@ def estimate(native, scene, camera, frames: Sequence[int],
     the frame as float32 linear gray of the camera's size, or None or a
     sentence saying why there is none (not decodable, another size, a file
     missing from a sequence); it reads the few frames read again after the
-    pass. `stream(frames, near)`, when given, yields (frame, the same) for the
-    reference frames spread over the clip, decoded ahead; near=True lets a
-    frame be one shortly before the one asked that is cheaper to reach (a
-    movie's key frame), or leaves some out. `source(frames)`, when given,
-    returns (a native FrameSource giving those frames in that order, decoded
+    pass. `stream(frames, near, size)`, when given, yields (frame, the same
+    reduced to size = (width, height)) for the reference frames spread over
+    the clip, decoded ahead; near=True lets a frame be one shortly before
+    the one asked that is cheaper to reach (a movie's key frame), or leaves
+    some out. `source(frames, size)`, when given, returns (a native
+    FrameSource giving those frames in that order at that size, decoded
     ahead, {frame: the index it reports for it}) for the pass over the clip;
     without them the frames are read with read_gray, and the pass's held in
     memory (tests, synthetic clips). `times_s`: capture times in seconds
@@ -162,14 +174,30 @@ def estimate(native, scene, camera, frames: Sequence[int],
         if progress is not None and progress(fraction) is False:
             raise Cancelled()
 
+    # Large frames are reduced (WORKING_MAX_WIDTH): `work` is the camera of
+    # the frames the evidence and the tracker see.
+    factor = working_factor(camera.width)
+    work = camera if factor == 1 else camera.resized(camera.width // factor,
+                                                     camera.height // factor)
+    size = (work.width, work.height)
+    top = -(-ignore_top_rows // factor)
+    result.tracker_pixel_scale = camera.width / work.width
+
+    def reduced(image: Gray) -> Gray:
+        """A frame read by read_gray at the working size."""
+        gray = _frame(image)
+        if gray is None or gray.shape == (work.height, work.width):
+            return image
+        return native.resized_gray(gray, work.width, work.height)
+
     # The reference frames are decoded ahead while the table is cast.
     wanted_reference = [frames[i] for i in spread(n)]
     reference_frames: Iterable[Tuple[int, Gray]] = (
-        ((f, read_gray(f)) for f in wanted_reference) if stream is None
-        else stream(wanted_reference, True))
+        ((f, reduced(read_gray(f))) for f in wanted_reference) if stream is None
+        else stream(wanted_reference, True, size))
     opts = native.SkyEvidenceOptions()
-    opts.ignore_top_rows = ignore_top_rows
-    sky = native.SkyEvidence(scene, camera, opts)
+    opts.ignore_top_rows = top
+    sky = native.SkyEvidence(scene, work, opts)
     t_table = time.perf_counter() - t0
     reference, kept = [], {}
     budget = REFERENCE_KEEP_BYTES if n <= SHORT_CLIP_FRAMES else 0
@@ -197,12 +225,9 @@ def estimate(native, scene, camera, frames: Sequence[int],
     reads = {"count": used_frames}
 
     def read_again(k):
-        """Frame k read again, at the tracker's size."""
+        """Frame k read again, at the working size."""
         reads["count"] += 1
-        gray = _frame(read_gray(frames[k]))
-        if gray is None or tracker_camera is camera:
-            return gray
-        return native.resized_gray(gray, tracker_camera.width, tracker_camera.height)
+        return _frame(reduced(read_gray(frames[k])))
 
     # The pass over the clip, in native code without Python's lock: evidence
     # for every frame, and the tracker following the shadows on the same
@@ -210,27 +235,19 @@ def estimate(native, scene, camera, frames: Sequence[int],
     ok = native.FrameEvidenceStatus.OK
     usable_status = (ok, native.FrameEvidenceStatus.NO_SHADOWS)
     directions = [tuple(d) for d in sky.directions.tolist()]
-    # Large frames are tracked reduced (area average) to at most
-    # TRACKER_MAX_WIDTH: the tracker's band and ground map grow with the
-    # pixels, not its accuracy (at 4K it took 108 ms a frame and 1.8 GB).
-    factor = -(-camera.width // TRACKER_MAX_WIDTH)
-    tracker_camera = camera if factor == 1 else camera.resized(camera.width // factor,
-                                                               camera.height // factor)
-    result.tracker_pixel_scale = camera.width / tracker_camera.width
-    tracker = native.ShadowTracker(scene, tracker_camera, list(ground_object_ids),
-                                   ignore_top_rows=-(-ignore_top_rows // factor),
+    tracker = native.ShadowTracker(scene, work, list(ground_object_ids), ignore_top_rows=top,
                                    subsamples=1 if factor > 1 else 0)
     clock = {"tracking": 0.0, "done": 0}
     rest = [f for f in frames if f not in kept]
     if source is None:
-        frame_source = native.FrameList([(i, read_gray(f)) for i, f in enumerate(rest)])
+        frame_source = native.FrameList([(i, reduced(read_gray(f))) for i, f in enumerate(rest)])
         index_of = {f: i for i, f in enumerate(rest)}
     else:
-        frame_source, index_of = source(rest)
+        frame_source, index_of = source(rest, size)
     pass_options = native.ClipPassOptions(steer_deg=REFINE_MAX_DEG)
     done = native.run_clip_pass(
         frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
-        [kept.get(f) for f in frames], starts, camera, sky, tracker, tracker_camera,
+        [kept.get(f) for f in frames], starts, work, sky, tracker, work,
         pass_options,
         lambda x: progress is None or progress(0.8 * x) is not False)
     del kept, frame_source

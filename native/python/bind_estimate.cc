@@ -319,7 +319,11 @@ void BindEstimate(py::module_& m) {
       .field("near", &FrameStreamOptions::near,
              "each frame the cheapest to reach at or before the one asked")
       .field("near_min_frames", &FrameStreamOptions::near_min_frames,
-             "near: key frames alone when at least this many");
+             "near: key frames alone when at least this many")
+      .field("width", &FrameStreamOptions::width,
+             "gray frames reduced to this width (0: as decoded)")
+      .field("height", &FrameStreamOptions::height,
+             "gray frames reduced to this height (0: as decoded)");
   py::class_<FrameSource>(m, "FrameSource",
                           "Where a pass over a clip takes its frames from.");
   py::class_<FrameList, FrameSource>(

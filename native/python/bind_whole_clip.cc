@@ -8,6 +8,7 @@
 #include "images.h"
 #include "options.h"
 #include "progress.h"
+#include "sunlapse/video/video_reader.h"
 #include "sunlapse/whole_clip/clip_pass.h"
 
 namespace sunlapse::python {
@@ -75,7 +76,7 @@ void BindWholeClip(py::module_& m) {
           py::gil_scoped_release release;
           // A copy even at the same size: the result must not share the
           // caller's array.
-          out = ResizedGray(img, width, height).clone();
+          out = AreaReduced(img, cv::Size(width, height)).clone();
         }
         return MatAsArray(std::move(out));
       },

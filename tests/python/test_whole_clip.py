@@ -207,6 +207,24 @@ def test_a_clean_clip_is_read_once_and_followed_on_every_frame(world):
         assert error_deg(r.sun_in_world, truth[k]) < 1.0, k
 
 
+def test_frames_wider_than_the_working_size_are_estimated_reduced(world, monkeypatch):
+    """Frames wider than WORKING_MAX_WIDTH are reduced by a power of two
+    before the evidence and the tracker see them (issue 18)."""
+    monkeypatch.setattr(whole_clip, "WORKING_MAX_WIDTH", W // 2)
+    assert whole_clip.working_factor(W) == 2
+    assert whole_clip.working_factor(W // 2) == 1
+    assert whole_clip.working_factor(W + 1) == 4
+    n = 20
+    truth = [path(k, n) for k in range(n)]
+    frames = [draw(world, truth[k], k) for k in range(n)]
+    result = run(world, frames)
+    assert result.tracker_pixel_scale == 2.0
+    assert all(r.refined for r in result.frames)
+    # 160x100 pixels: the pole is half a pixel wide.
+    errors = [error_deg(r.sun_in_world, truth[k]) for k, r in enumerate(result.frames)]
+    assert np.mean(errors) < 1.0 and max(errors) < 2.0, errors
+
+
 def test_suns_off_their_circle_lose_confidence():
     """The Sun's path over a segment is a small circle about the pole: raw
     Suns far off the circle fitted to the segment lose their confidence, the

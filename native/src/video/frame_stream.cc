@@ -22,6 +22,9 @@ void FrameStreamOptions::Check() const {
     throw std::invalid_argument("near_min_frames must be >= 1");
   if (!(gamma > 0.0 && gamma <= 10.0))
     throw std::invalid_argument("gamma must be in (0, 10]");
+  if (width < 0 || height < 0 || (width == 0) != (height == 0))
+    throw std::invalid_argument(
+        "width and height must both be > 0, or both 0 (the decoded size)");
 }
 
 struct FrameStream::Impl {
@@ -86,8 +89,9 @@ struct FrameStream::Impl {
     }
     // Colour only when asked for: gray straight from the decoder skips
     // the colour conversion (the luma is the gray).
+    const cv::Size size(options.width, options.height);
     cv::Mat bgr;
-    if (!(options.keep_bgr ? reader.Read(&bgr) : reader.ReadGray(&bgr))) {
+    if (!(options.keep_bgr ? reader.Read(&bgr) : reader.ReadGray(&bgr, size))) {
       f.message = "the clip ended before frame " + std::to_string(f.index + 1);
       return f;
     }
@@ -104,7 +108,7 @@ struct FrameStream::Impl {
       f.gray = Recycled(bgr.rows, bgr.cols);
       cv::LUT(bgr, table, f.gray);
     } else {
-      f.gray = ToLinearGray(bgr, options.gamma);
+      f.gray = AreaReduced(ToLinearGray(bgr, options.gamma), size);
     }
     if (options.keep_bgr) f.bgr = std::move(bgr);
     return f;

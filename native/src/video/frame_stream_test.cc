@@ -65,6 +65,24 @@ TEST(FrameStream, HandsOutTheFramesAskedInTheirOrderAsLinearGray) {
   EXPECT_FALSE(s.Next(&f));
 }
 
+TEST(FrameStream, ReducesFramesToTheSizeAsked) {
+  const Sequence seq("reduce", 3);
+  FrameStreamOptions o;
+  o.width = 8;
+  o.height = 6;
+  FrameStream s(seq.Path(0), {0, 1, 2}, o);
+  EXPECT_EQ(s.width(), 16);  // the clip's own size
+  StreamedFrame f;
+  int n = 0;
+  while (s.Next(&f)) {
+    ASSERT_EQ(f.status, StreamedFrame::Status::kOk) << f.message;
+    ASSERT_EQ(f.gray.size(), cv::Size(8, 6));
+    EXPECT_NEAR(f.gray.at<float>(3, 3), Expected(f.index, 2.2), 1e-6);
+    ++n;
+  }
+  EXPECT_EQ(n, 3);
+}
+
 // Buffers are reused once the consumer lets go of them, never before.
 TEST(FrameStream, FramesTheConsumerKeepsAreNeverOverwritten) {
   const Sequence seq("keep", 12);
@@ -156,6 +174,9 @@ TEST(FrameStream, RefusesBadOptionsAndMissingFiles) {
   const Sequence seq("bad", 1);
   FrameStreamOptions o;
   o.queue_frames = 0;
+  EXPECT_THROW(FrameStream(seq.Path(0), {0}, o), std::invalid_argument);
+  o = FrameStreamOptions();
+  o.width = 8;  // and no height
   EXPECT_THROW(FrameStream(seq.Path(0), {0}, o), std::invalid_argument);
   EXPECT_THROW(FrameStream("/nonexistent/clip.mp4", {0}, FrameStreamOptions()),
                std::invalid_argument);

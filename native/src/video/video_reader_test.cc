@@ -85,6 +85,84 @@ TEST(VideoReader, ReadsGrayWithoutColourConversionCloseToBgrsGray) {
   EXPECT_LE(worst, 2.0);
 }
 
+// A horizontal ramp of grays, black to white.
+cv::Mat Ramp(int width, int height) {
+  cv::Mat img(height, width, CV_8UC3);
+  for (int x = 0; x < width; ++x)
+    img.col(x).setTo(cv::Scalar::all(255.0 * x / (width - 1)));
+  return img;
+}
+
+// Movies whose decoder gives planar YUV are read as gray from the luma
+// plane itself: full range (MJPEG) as it is, video range (MPEG-4) expanded
+// to 0-255 as the colour conversion does.
+TEST(VideoReader, ReadsGrayFromTheLumaPlaneInTheColourConversionsRange) {
+  const fs::path d = TempDir("luma");
+  for (const char* fourcc : {"MJPG", "mp4v"}) {
+    const std::string path = (d / (std::string(fourcc) + ".avi")).string();
+    {
+      cv::VideoWriter w(path,
+                        cv::VideoWriter::fourcc(fourcc[0], fourcc[1], fourcc[2],
+                                                fourcc[3]),
+                        25, cv::Size(64, 48));
+      ASSERT_TRUE(w.isOpened()) << fourcc;
+      for (int i = 0; i < 3; ++i) w.write(Ramp(64, 48));
+    }
+    VideoReader bgr_reader(path), gray_reader(path);
+    cv::Mat bgr, gray, expected, diff;
+    ASSERT_TRUE(bgr_reader.Read(&bgr));
+    ASSERT_TRUE(gray_reader.ReadGray(&gray));
+    ASSERT_EQ(gray.type(), CV_8UC1);
+    cv::cvtColor(bgr, expected, cv::COLOR_BGR2GRAY);
+    cv::absdiff(gray, expected, diff);
+    double worst = 0, black = 0, white = 0;
+    cv::minMaxLoc(diff, nullptr, &worst);
+    EXPECT_LE(worst, 3.0) << fourcc;
+    cv::minMaxLoc(gray, &black, &white);
+    EXPECT_LE(black, 4.0) << fourcc;
+    EXPECT_GE(white, 251.0) << fourcc;
+  }
+}
+
+TEST(VideoReader, ReadsGrayReducedByAreaAveraging) {
+  const fs::path d = TempDir("reduced");
+  const std::string path = (d / "clip.avi").string();
+  {
+    cv::VideoWriter w(path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), 25,
+                      cv::Size(64, 48));
+    ASSERT_TRUE(w.isOpened());
+    for (int i = 0; i < 3; ++i) w.write(Ramp(64, 48));
+  }
+  VideoReader full_reader(path), reduced_reader(path);
+  cv::Mat full, reduced, diff;
+  ASSERT_TRUE(full_reader.ReadGray(&full));
+  ASSERT_TRUE(reduced_reader.ReadGray(&reduced, cv::Size(16, 12)));
+  ASSERT_EQ(reduced.size(), cv::Size(16, 12));
+  // Reduced, then the range expanded: one level of rounding apart.
+  cv::absdiff(reduced, AreaReduced(full, cv::Size(16, 12)), diff);
+  double worst = 0;
+  cv::minMaxLoc(diff, nullptr, &worst);
+  EXPECT_LE(worst, 1.0);
+}
+
+TEST(AreaReduced, HalvingsAreOneAreaAverage) {
+  cv::Mat img(48, 64, CV_32F);
+  cv::randu(img, 0.0, 1.0);
+  for (const cv::Size size : {cv::Size(32, 24), cv::Size(16, 12),
+                              cv::Size(8, 6), cv::Size(24, 18)}) {
+    cv::Mat direct, diff;
+    cv::resize(img, direct, size, 0, 0, cv::INTER_AREA);
+    const cv::Mat got = AreaReduced(img, size);
+    ASSERT_EQ(got.size(), size);
+    cv::absdiff(got, direct, diff);
+    double worst = 0;
+    cv::minMaxLoc(diff, nullptr, &worst);
+    EXPECT_LT(worst, 1e-5) << size;
+  }
+  EXPECT_EQ(AreaReduced(img, img.size()).data, img.data);
+  EXPECT_EQ(AreaReduced(img, cv::Size()).data, img.data);
+}
+
 TEST(VideoReader, CorruptFrameComesBackEmptyAndReadingGoesOn) {
   const fs::path d = TempDir("corrupt");
   cv::imwrite((d / "f_1.png").string(), Frame(0));

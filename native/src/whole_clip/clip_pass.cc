@@ -4,9 +4,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include <opencv2/imgproc.hpp>
-
 #include "sunlapse/common/angles.h"
+#include "sunlapse/video/video_reader.h"
 
 namespace sunlapse {
 
@@ -17,14 +16,6 @@ void ClipPassOptions::Check() const {
     throw std::invalid_argument("steer_deg must be in (0, 180]");
   if (progress_every < 1)
     throw std::invalid_argument("progress_every must be >= 1");
-}
-
-cv::Mat ResizedGray(const cv::Mat& frame, int width, int height) {
-  if (frame.empty() || (frame.cols == width && frame.rows == height))
-    return frame;
-  cv::Mat out;
-  cv::resize(frame, out, cv::Size(width, height), 0, 0, cv::INTER_AREA);
-  return out;
 }
 
 bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
@@ -102,7 +93,8 @@ ClipPassResult RunClipPass(FrameSource* source,
     if (gray.empty() || (e.status != FrameEvidence::Status::kOk &&
                          e.status != FrameEvidence::Status::kNoShadows))
       continue;
-    gray = ResizedGray(gray, tracker_camera.width(), tracker_camera.height());
+    gray = AreaReduced(
+        gray, cv::Size(tracker_camera.width(), tracker_camera.height()));
     const bool sure = e.status == FrameEvidence::Status::kOk &&
                       e.best_direction >= 0 && e.margin >= options.start_margin;
     if (!following) {

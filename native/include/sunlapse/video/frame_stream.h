@@ -31,6 +31,10 @@ struct FrameStreamOptions {
   // index gives one frame as above.
   bool near = false;
   int near_min_frames = 8;
+  // The gray frames' size: reduced by area averaging (AreaReduced) from the
+  // decoded 8-bit luma, before linearising; 0 x 0 keeps the decoded size.
+  // Reducing first costs a fraction of linearising the whole frame.
+  int width = 0, height = 0;
   void Check() const;
 };
 
@@ -44,7 +48,7 @@ struct StreamedFrame {
   Status status = Status::kPastEnd;
   FrameReport report;   // the reader's own report of the frame
   std::string message;  // why not, for kUnusable and kPastEnd
-  cv::Mat gray;         // CV_32F linear gray, kOk only
+  cv::Mat gray;         // CV_32F linear gray (options' size), kOk only
   cv::Mat bgr;          // CV_8UC3, kOk with keep_bgr only
 };
 

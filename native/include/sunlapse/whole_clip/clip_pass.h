@@ -59,10 +59,6 @@ struct ClipPassResult {
 // the frame under the Sun it is given; the grid cell's shadows are a little
 // off). Returns whether it started; *refined gets its Sun on the frame when
 // within refine_max_deg of the direction (else ok=false).
-// `frame` resized (area average) to width x height, or itself when it has
-// that size.
-cv::Mat ResizedGray(const cv::Mat& frame, int width, int height);
-
 bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
                   const Eigen::Vector3d& sun_in_world, double refine_max_deg,
                   TrackedFrame* refined);
