@@ -225,7 +225,11 @@ def estimate(native, scene, camera, frames: Sequence[int],
     reads = {"count": used_frames}
 
     def read_again(k):
-        """Frame k read again, at the working size."""
+        """Frame k at the working size: as the pass kept it, else read
+        again."""
+        gray = held.pop(k, None)
+        if gray is not None:
+            return gray
         reads["count"] += 1
         return _frame(reduced(read_gray(frames[k])))
 
@@ -260,6 +264,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     status = [p.evidence.status for p in done["frames"]]
     reasons = [p.read_message or p.evidence.message or None for p in done["frames"]]
     tracked: List[object] = [p.track for p in done["frames"]]
+    # Frames the pass kept because the check is likely to want them again.
+    held = {k: p.gray for k, p in enumerate(done["frames"]) if p.gray is not None}
     del done
     t_evidence = time.perf_counter() - t0
 

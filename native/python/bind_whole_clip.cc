@@ -21,14 +21,24 @@ void BindWholeClip(py::module_& m) {
       .field("steer_deg", &ClipPassOptions::steer_deg,
              "drift from unmistakable evidence that steers the tracker (deg)")
       .field("progress_every", &ClipPassOptions::progress_every,
-             "frames between progress calls");
+             "frames between progress calls")
+      .field("keep_off_deg", &ClipPassOptions::keep_off_deg,
+             "keep frames tracked this far from their own evidence (deg)")
+      .field("keep_max_frames", &ClipPassOptions::keep_max_frames,
+             "keep at most this many frames for the check");
 
   py::class_<ClipPassFrame>(m, "ClipPassFrame", "One frame of a clip pass.")
       .def_readonly("index", &ClipPassFrame::index)
       .def_readonly("read_message", &ClipPassFrame::read_message)
       .def_readonly("evidence", &ClipPassFrame::evidence)
-      .def_property_readonly("track", [](const ClipPassFrame& f) -> py::object {
-        return f.tracked ? py::cast(f.track) : py::none();
+      .def_property_readonly("track",
+                             [](const ClipPassFrame& f) -> py::object {
+                               return f.tracked ? py::cast(f.track)
+                                                : py::none();
+                             })
+      .def_property_readonly("gray", [](const ClipPassFrame& f) -> py::object {
+        if (f.gray.empty()) return py::none();
+        return MatAsArray(f.gray);
       });
 
   m.def(

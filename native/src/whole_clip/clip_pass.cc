@@ -16,6 +16,10 @@ void ClipPassOptions::Check() const {
     throw std::invalid_argument("steer_deg must be in (0, 180]");
   if (progress_every < 1)
     throw std::invalid_argument("progress_every must be >= 1");
+  if (!(keep_off_deg >= 0.0))
+    throw std::invalid_argument("keep_off_deg must be >= 0");
+  if (keep_max_frames < 0)
+    throw std::invalid_argument("keep_max_frames must be >= 0");
 }
 
 bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
@@ -54,6 +58,23 @@ ClipPassResult RunClipPass(FrameSource* source,
   out.frames.resize(n);
   const SkyGrid& grid = sky->grid();
   bool following = false;
+  int kept_frames = 0;
+  bool from_source = false;  // the frame came from `source`, not `kept`
+  // Keeps the frame when the check is likely to want it again.
+  auto keep_if_doubtful = [&](ClipPassFrame* pf, const cv::Mat& frame) {
+    const FrameEvidence& e = pf->evidence;
+    const bool doubtful =
+        !pf->tracked ||
+        (e.best_direction >= 0 &&
+         AngleBetweenDeg(pf->track.sun_in_world,
+                         grid.direction(e.best_direction)) >
+             options.keep_off_deg);
+    if (doubtful && kept_frames < options.keep_max_frames) {
+      // Frames the caller kept may be views of its own buffers: copied.
+      pf->gray = from_source ? frame : frame.clone();
+      ++kept_frames;
+    }
+  };
   for (size_t k = 0; k < n; ++k) {
     if (progress && k % options.progress_every == 0 &&
         !progress(static_cast<double>(k) / n)) {
@@ -64,6 +85,7 @@ ClipPassResult RunClipPass(FrameSource* source,
     }
     ClipPassFrame& pf = out.frames[k];
     cv::Mat gray;
+    from_source = kept[k].empty();
     if (!kept[k].empty()) {
       gray = kept[k];
       pf.index = source_index[k];
@@ -110,6 +132,7 @@ ClipPassResult RunClipPass(FrameSource* source,
         out.tracker_started = out.tracker_started || following;
         out.tracking_seconds += pf.track.seconds;
       }
+      keep_if_doubtful(&pf, gray);
       continue;
     }
     // A frame where the tracker loses the shadow (a cloud, a person) does
@@ -127,6 +150,7 @@ ClipPassResult RunClipPass(FrameSource* source,
     }
     pf.tracked = r.ok;
     pf.track = std::move(r);
+    keep_if_doubtful(&pf, gray);
   }
   if (progress) progress(1.0);
   out.seconds =

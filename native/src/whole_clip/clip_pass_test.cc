@@ -118,6 +118,41 @@ TEST(ClipPass, TracksOnFramesResizedToTheTrackersCamera) {
   EXPECT_GE(tracked, fx.n - 2);
 }
 
+// Frames the check may want again are kept, up to a number; a frame the
+// caller passed in is copied, not referenced.
+TEST(ClipPass, KeepsFramesTrackedAwayFromTheirEvidenceUpToANumber) {
+  Fixture fx;
+  std::vector<cv::Mat> kept(fx.n);
+  kept[0] = fx.frames[0];
+  std::vector<StreamedFrame> rest;
+  FrameList all = fx.Source(-1, -1);
+  for (StreamedFrame s; all.Next(&s);)
+    if (s.index != 0) rest.push_back(s);
+  FrameList source(std::move(rest));
+  ClipPassOptions o;
+  o.keep_off_deg = 0.0;  // every frame is "away" from its evidence
+  o.keep_max_frames = 3;
+  const ClipPassResult r = RunClipPass(&source, fx.Indices(), kept, {}, fx.cam,
+                                       &fx.sky, &fx.tracker, fx.cam, o, nullptr);
+  for (int f = 0; f < fx.n; ++f) {
+    const cv::Mat& g = r.frames[f].gray;
+    EXPECT_EQ(g.empty(), f >= 3) << f;
+    if (g.empty()) continue;
+    EXPECT_EQ(g.size(), cv::Size(fx.cam.width(), fx.cam.height()));
+    EXPECT_EQ(cv::norm(g, fx.frames[f], cv::NORM_INF), 0.0) << f;
+  }
+  EXPECT_NE(r.frames[0].gray.data, fx.frames[0].data);
+
+  Fixture again;
+  FrameList clean = again.Source(-1, -1);
+  o.keep_off_deg = 180.0;  // only frames the tracker did not follow
+  const ClipPassResult none =
+      RunClipPass(&clean, again.Indices(), std::vector<cv::Mat>(again.n), {},
+                  again.cam, &again.sky, &again.tracker, again.cam, o, nullptr);
+  for (int f = 0; f < again.n; ++f)
+    EXPECT_EQ(none.frames[f].gray.empty(), none.frames[f].tracked) << f;
+}
+
 TEST(ClipPass, StopsWhenAskedAndRefusesAMismatchedSource) {
   Fixture fx;
   FrameList source = fx.Source(-1, -1);
