@@ -53,14 +53,6 @@ REFINE_MAX_DEG = 8.0
 WORKING_MAX_WIDTH = 1280
 
 
-def working_factor(width: int) -> int:
-    """The power of two a frame `width` wide is divided by to be at most
-    WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
-    factor = 1
-    while width > factor * WORKING_MAX_WIDTH:
-        factor *= 2
-    return factor
-
 # Confidence of a frame grows with the chosen path's lead over the best path
 # through a direction well away from it on that frame (log-likelihood units,
 # see sun_path.h; the frame's own evidence and its neighbours'): full at this
@@ -128,6 +120,15 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
+def working_factor(width: int) -> int:
+    """The power of two a frame `width` wide is divided by to be at most
+    WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
+    factor = 1
+    while width > factor * WORKING_MAX_WIDTH:
+        factor *= 2
+    return factor
+
+
 def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     """k positions spread evenly over range(n) (all of them when n <= k)."""
     if n <= k:
@@ -140,6 +141,8 @@ def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
 
 
 Gray = Union[np.ndarray, str, None]
+# (frames, (width, height)) -> (a native FrameSource, {frame: its index})
+SourceFn = Callable[[Sequence[int], Tuple[int, int]], Tuple[object, dict]]
 
 
 def estimate(native, scene, camera, frames: Sequence[int],
@@ -148,7 +151,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
              ignore_top_rows: int = 0,
              progress: Optional[Callable[[float], object]] = None,
              stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None,
-             source: Optional[Callable[[Sequence[int]], Tuple[object, dict]]] = None
+             source: Optional[SourceFn] = None
              ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a

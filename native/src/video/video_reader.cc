@@ -188,8 +188,7 @@ class Decoder {
     if (f->data[0] == nullptr || f->linesize[0] < f->width) return false;
     const cv::Mat luma(f->height, f->width, CV_8UC1, f->data[0],
                        static_cast<size_t>(f->linesize[0]));
-    const cv::Mat reduced =
-        size.empty() ? luma : AreaReduced(luma, size);
+    const cv::Mat reduced = size.empty() ? luma : AreaReduced(luma, size);
     if (full_range) {
       reduced.copyTo(*out);  // a copy when not reduced: the decoder reuses it
     } else {
@@ -197,8 +196,8 @@ class Decoder {
         // Video range: black at 16, white at 235 (as swscale expands it).
         video_to_full_.create(1, 256, CV_8U);
         for (int v = 0; v < 256; ++v)
-          video_to_full_.at<uint8_t>(0, v) = cv::saturate_cast<uint8_t>(
-              std::lround((v - 16) * 255.0 / 219.0));
+          video_to_full_.at<uint8_t>(0, v) =
+              cv::saturate_cast<uint8_t>(std::lround((v - 16) * 255.0 / 219.0));
       }
       cv::LUT(reduced, video_to_full_, *out);
     }

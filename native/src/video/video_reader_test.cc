@@ -101,10 +101,10 @@ TEST(VideoReader, ReadsGrayFromTheLumaPlaneInTheColourConversionsRange) {
   for (const char* fourcc : {"MJPG", "mp4v"}) {
     const std::string path = (d / (std::string(fourcc) + ".avi")).string();
     {
-      cv::VideoWriter w(path,
-                        cv::VideoWriter::fourcc(fourcc[0], fourcc[1], fourcc[2],
-                                                fourcc[3]),
-                        25, cv::Size(64, 48));
+      cv::VideoWriter w(
+          path,
+          cv::VideoWriter::fourcc(fourcc[0], fourcc[1], fourcc[2], fourcc[3]),
+          25, cv::Size(64, 48));
       ASSERT_TRUE(w.isOpened()) << fourcc;
       for (int i = 0; i < 3; ++i) w.write(Ramp(64, 48));
     }
@@ -148,8 +148,8 @@ TEST(VideoReader, ReadsGrayReducedByAreaAveraging) {
 TEST(AreaReduced, HalvingsAreOneAreaAverage) {
   cv::Mat img(48, 64, CV_32F);
   cv::randu(img, 0.0, 1.0);
-  for (const cv::Size size : {cv::Size(32, 24), cv::Size(16, 12),
-                              cv::Size(8, 6), cv::Size(24, 18)}) {
+  for (const cv::Size size :
+       {cv::Size(32, 24), cv::Size(16, 12), cv::Size(8, 6), cv::Size(24, 18)}) {
     cv::Mat direct, diff;
     cv::resize(img, direct, size, 0, 0, cv::INTER_AREA);
     const cv::Mat got = AreaReduced(img, size);

@@ -64,11 +64,10 @@ ClipPassResult RunClipPass(FrameSource* source,
   auto keep_if_doubtful = [&](ClipPassFrame* pf, const cv::Mat& frame) {
     const FrameEvidence& e = pf->evidence;
     const bool doubtful =
-        !pf->tracked ||
-        (e.best_direction >= 0 &&
-         AngleBetweenDeg(pf->track.sun_in_world,
-                         grid.direction(e.best_direction)) >
-             options.keep_off_deg);
+        !pf->tracked || (e.best_direction >= 0 &&
+                         AngleBetweenDeg(pf->track.sun_in_world,
+                                         grid.direction(e.best_direction)) >
+                             options.keep_off_deg);
     if (doubtful && kept_frames < options.keep_max_frames) {
       // Frames the caller kept may be views of its own buffers: copied.
       pf->gray = from_source ? frame : frame.clone();

@@ -132,8 +132,9 @@ TEST(ClipPass, KeepsFramesTrackedAwayFromTheirEvidenceUpToANumber) {
   ClipPassOptions o;
   o.keep_off_deg = 0.0;  // every frame is "away" from its evidence
   o.keep_max_frames = 3;
-  const ClipPassResult r = RunClipPass(&source, fx.Indices(), kept, {}, fx.cam,
-                                       &fx.sky, &fx.tracker, fx.cam, o, nullptr);
+  const ClipPassResult r =
+      RunClipPass(&source, fx.Indices(), kept, {}, fx.cam, &fx.sky, &fx.tracker,
+                  fx.cam, o, nullptr);
   for (int f = 0; f < fx.n; ++f) {
     const cv::Mat& g = r.frames[f].gray;
     EXPECT_EQ(g.empty(), f >= 3) << f;
