@@ -190,7 +190,8 @@ class Decoder {
                        static_cast<size_t>(f->linesize[0]));
     const cv::Mat reduced = size.empty() ? luma : AreaReduced(luma, size);
     if (full_range) {
-      reduced.copyTo(*out);  // a copy when not reduced: the decoder reuses it
+      // The decoder reuses its picture: copied when not reduced.
+      *out = reduced.data == luma.data ? luma.clone() : reduced;
     } else {
       if (video_to_full_.empty()) {
         // Video range: black at 16, white at 235 (as swscale expands it).
