@@ -98,3 +98,14 @@ def test_figures_take_the_ratio_against_the_reference_mode():
     # A track without the timing keys still gives the process's figures.
     bare = whole_run.figures_of(decode, dict(est, timing={}))
     assert "ratio" not in bare and bare["wall_fps"] == 20.0
+
+
+def test_the_small_clip_row_judges_the_whole_estimate_against_three_seconds():
+    def row(total_s):
+        fig = {"sizes": {"800x450, 120 frames": {"height": 450, "total_s": total_s}},
+               "long": {}}
+        return [r for r in whole_run.summary_lines(fig) if "800x450" in r[0]]
+    assert row(2.5) == [("estimate <= 3 s, 800x450, 120 frames (issue 14)", "2.50 s", "met")]
+    assert row(3.5)[0][2] == "not met"
+    assert whole_run.parse_sizes("450") == [450]
+    assert 450 not in whole_run.DEFAULT_SIZES
