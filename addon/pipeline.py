@@ -11,9 +11,12 @@ segment.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
+
+import numpy as np
 
 from . import acquire, native_loader
 from .estimate import whole_clip
@@ -430,12 +433,15 @@ def _run_tracked(scene, camera, source, frames, visit, times, options, track, pr
     return track
 
 
-def _finish(native, track, raws, options, times, progress, segments, pixel_scale=1.0):
+def _finish(native, track, raws, options, times, progress, segments, pixel_scale=1.0,
+            circle=None):
     """Smooths the raw angles (per segment: smoothing never crosses a jump)
     and fills the track's frames. raws: (frame, zenith, geographic azimuth,
     confidence, reason, native result) in frame order; times: capture times
     of the run's frames in frame order, or None; pixel_scale: camera pixels
-    per pixel of the native results (a tracker on reduced frames)."""
+    per pixel of the native results (a tracker on reduced frames); circle:
+    {index into raws: (zenith, geographic azimuth) of its segment's Sun
+    circle} where one was fitted (_doubt_off_circle)."""
     _check_progress(progress, 0.97)
     numbers = [r[0] for r in raws]
     north = track.north_offset_deg
@@ -452,7 +458,7 @@ def _finish(native, track, raws, options, times, progress, segments, pixel_scale
             track.north_offset_deg = north
     if zs is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
-        zs, azs = _smooth_segments(numbers, raws, segments, mode, options, times)
+        zs, azs = _smooth_segments(numbers, raws, segments, mode, options, times, circle)
     for k, ((f, z, a, conf, reason, res), zs_f, as_f) in enumerate(zip(raws, zs, azs)):
         est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,
                                       raw_zenith_deg=z, raw_azimuth_deg=a,
@@ -466,10 +472,21 @@ def _finish(native, track, raws, options, times, progress, segments, pixel_scale
         track.frames.append(est)
 
 
-def _smooth_segments(numbers, raws, segments, mode, options, times):
+# Smoothing spans a segment's frames between the first and the last with
+# this much confidence. Past them the tracker followed shadows without
+# evidence of their own (a sunset's fading shadows: confidence near 0), and
+# a fit extrapolated onto them invents: on the Marseille January clip the
+# two-pass track ended 10 deg off, below the horizon. Those frames take the
+# span's end Sun moved as the segment's Sun circle moves, else their own raw
+# Sun no further from the end's than the Sun can move.
+SPAN_MIN_CONFIDENCE = 0.1
+
+
+def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None):
     """Smooths each segment on its own, only between its first and last
-    frames with angles: nothing is extrapolated past a segment's measured
-    frames, and no fit runs through a time jump."""
+    frames with angles and confidence (SPAN_MIN_CONFIDENCE): nothing is
+    extrapolated past them beyond the Sun's own motion, and no fit runs
+    through a time jump. circle: as _finish's."""
     index = {f: k for k, f in enumerate(numbers)}
     seconds = None if times is None else frametimes.seconds_since(times)
     zs, azs = [None] * len(numbers), [None] * len(numbers)
@@ -478,7 +495,9 @@ def _smooth_segments(numbers, raws, segments, mode, options, times):
         have = [k for k in ks if raws[k][1] is not None]
         if not have:
             continue
-        ks = [k for k in ks if have[0] <= k <= have[-1]]
+        least = SPAN_MIN_CONFIDENCE if options.method == "default" else 0.0  # thesis: as it was
+        span = [k for k in have if raws[k][3] >= least] or have
+        ks = [k for k in ks if span[0] <= k <= span[-1]]
         x = [numbers[k] for k in ks] if seconds is None else [seconds[k] for k in ks]
         if mode == "two_pass" and options.method == "default":
             z_s, a_s = smoothing.two_pass_local_directions(
@@ -491,7 +510,43 @@ def _smooth_segments(numbers, raws, segments, mode, options, times):
                 times_s=None if seconds is None else [seconds[k] for k in ks])
         for k, z, a in zip(ks, z_s, a_s):
             zs[k], azs[k] = z, a
+        for k in have:
+            if span[0] <= k <= span[-1] or zs[span[0]] is None or zs[span[-1]] is None:
+                continue
+            end = span[0] if k < span[0] else span[-1]
+            moved = (abs(seconds[k] - seconds[end]) / 3600.0 * whole_clip.SUN_DEG_PER_HOUR
+                     if seconds is not None else abs(k - end) * whole_clip.UNTIMED_STEP_DEG)
+            zs[k], azs[k] = _past_span(zs[end], azs[end], raws[k][1], raws[k][2], moved,
+                                       None if circle is None else circle.get(end),
+                                       None if circle is None else circle.get(k))
     return zs, azs
+
+
+def _past_span(z_end, a_end, z_raw, a_raw, moved_deg, circle_end, circle_here):
+    """A frame's Sun past its segment's smoothed span (all azimuths
+    geographic): the end's Sun turned as the circle turns from the end to
+    the frame, else the frame's raw Sun pulled to within moved_deg of it."""
+    end = angles.sun_in_world_from_angles(z_end, a_end)
+    if circle_end is not None and circle_here is not None:
+        u = angles.sun_in_world_from_angles(*circle_end)
+        w = angles.sun_in_world_from_angles(*circle_here)
+        turned = _rotated(end, np.cross(u, w), angles.angle_between_deg(u, w))
+        return tuple(float(t) for t in angles.angles_from_sun_in_world(turned))
+    raw = angles.sun_in_world_from_angles(z_raw, a_raw)
+    off = angles.angle_between_deg(end, raw)
+    if off <= moved_deg:
+        return z_raw, a_raw
+    turned = _rotated(end, np.cross(end, raw), moved_deg)
+    return tuple(float(t) for t in angles.angles_from_sun_in_world(turned))
+
+
+def _rotated(v, axis, angle_deg):
+    """v turned by angle_deg about axis (Rodrigues); v itself for a null axis."""
+    n = float(np.linalg.norm(axis))
+    if n < 1e-12:
+        return v
+    k, c, s = axis / n, math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
+    return v * c + np.cross(k, v) * s + k * float(k @ v) * (1.0 - c)
 
 
 def _wrong_size(image, camera) -> Optional[str]:
@@ -514,11 +569,14 @@ CIRCLE_MIN_FRAMES = 8
 
 
 def _doubt_off_circle(raws, segments, frames, times, north):
-    """raws (frame, zenith, geographic azimuth, confidence, reason, result)
-    with less confidence where the Sun is off its segment's circle."""
+    """(raws (frame, zenith, geographic azimuth, confidence, reason,
+    result) with less confidence where the Sun is off its segment's circle,
+    {index into raws: (zenith, geographic azimuth) of its segment's circle}
+    for the segments with one)."""
     index = {f: k for k, f in enumerate(frames)}
     seconds = None if times is None else frametimes.seconds_since(times)
     out = list(raws)
+    along = {}
     for seg in segments:
         ks = sorted(index[f] for f in seg)
         use = [k for k in ks if out[k][1] is not None and out[k][3] >= 0.3]
@@ -533,6 +591,8 @@ def _doubt_off_circle(raws, segments, frames, times, north):
         if not fit.success:
             continue
         for i, k in enumerate(ks):
+            along[k] = (fit.zenith_deg[i],
+                        angles.azimuth_geographic_from_world(fit.azimuth_world_deg[i], north))
             f, z, a, conf, reason, res = out[k]
             if z is None:
                 continue
@@ -541,7 +601,7 @@ def _doubt_off_circle(raws, segments, frames, times, north):
             off = angles.angle_between_deg(raw, fitted)
             if off > CIRCLE_DOUBT_DEG:
                 out[k] = (f, z, a, conf * (CIRCLE_DOUBT_DEG / off) ** 2, reason, res)
-    return out
+    return out, along
 
 
 def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, options, track,
@@ -632,7 +692,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
         z, a_world = angles.angles_from_sun_in_world(r.sun_in_world)
         geographic[f] = (float(z), float(angles.azimuth_geographic_from_world(a_world, north)))
         raws.append((f, *geographic[f], r.confidence, r.reason, r.tracked))
-    raws = _doubt_off_circle(raws, result.segments, frames, times, north)
+    raws, circle = _doubt_off_circle(raws, result.segments, frames, times, north)
     if result.anchor is not None:
         a = by_frame[result.anchor]
         track.initial = {"frame": a.frame, "zenith_deg": geographic[a.frame][0],
@@ -656,7 +716,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
     if result.jumps:
         track.extra["jumps"] = result.jumps
     _finish(native, track, raws, options, times, progress, result.segments,
-            result.tracker_pixel_scale)
+            result.tracker_pixel_scale, circle)
     wait = 0.0 if pass_stream["stream"] is None else pass_stream["stream"].wait_seconds
     pass_stream["stream"] = None
     track.extra["timing"] = dict(result.timing, decode_wait_s=wait,

@@ -225,28 +225,37 @@ def test_frames_wider_than_the_working_size_are_estimated_reduced(world, monkeyp
     assert np.mean(errors) < 1.0 and max(errors) < 2.0, errors
 
 
-def test_suns_off_their_circle_lose_confidence():
-    """The Sun's path over a segment is a small circle about the pole: raw
-    Suns far off the circle fitted to the segment lose their confidence, the
-    further the more (pipeline._doubt_off_circle); the others keep it."""
-    import datetime as dt
+def sun_on_its_circle(k):
+    """The Sun at 40 deg N, declination 12 deg, frame k 6 minutes after
+    frame k-1 from 08:00 (4 h before noon): 1.5 deg of hour angle a frame."""
     lat, dec = math.radians(40.0), math.radians(12.0)
     pole = np.array([0.0, math.cos(lat), math.sin(lat)])  # north is +Y
     e1 = np.cross(pole, [1.0, 0.0, 0.0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(pole, e1)
+    h = math.radians(-60.0 + 1.5 * k)
+    return math.cos(dec) * (math.cos(h) * e1 + math.sin(h) * e2) + math.sin(dec) * pole
+
+
+def frame_times(n):
+    import datetime as dt
     t0 = dt.datetime(2025, 6, 1, 8, 0, tzinfo=dt.timezone.utc)
+    return [t0 + dt.timedelta(minutes=6 * k) for k in range(n)]
+
+
+def test_suns_off_their_circle_lose_confidence():
+    """The Sun's path over a segment is a small circle about the pole: raw
+    Suns far off the circle fitted to the segment lose their confidence, the
+    further the more (pipeline._doubt_off_circle); the others keep it."""
     frames = list(range(1, 41))
-    times = [t0 + dt.timedelta(minutes=6 * k) for k in range(40)]
+    times = frame_times(40)
     off = {7: 8.0, 20: 6.0, 33: 10.0}
     raws = []
     for k, f in enumerate(frames):
-        h = math.radians(-60.0 + 1.5 * k)  # 15 deg an hour
-        sun = math.cos(dec) * (math.cos(h) * e1 + math.sin(h) * e2) + math.sin(dec) * pole
-        z, a = angles.angles_from_sun_in_world(sun)
+        z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
         z = float(z) + off.get(f, 0.0)
         raws.append((f, z, float(a) % 360.0, 0.95, None, None))
-    out = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
+    out, _ = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
     conf = {r[0]: r[3] for r in out}
     for f in frames:
         if f in off:
@@ -254,3 +263,34 @@ def test_suns_off_their_circle_lose_confidence():
         else:
             assert conf[f] == 0.95, f
     assert conf[20] > conf[7] > conf[33]  # 6, 8 and 10 deg off
+
+
+def test_frames_past_the_confident_span_follow_the_circle_not_the_fit():
+    """Frames past a segment's last confident one (shadows fading at
+    sunset, followed without evidence: confidence near 0) are not where a
+    fit extrapolates: they take the span's end Sun turned as the Sun's
+    circle turns; with no circle, their raw Sun within the Sun's motion."""
+    n, confident = 40, 30
+    frames = list(range(1, n + 1))
+    times = frame_times(n)
+    raws = []
+    for k, f in enumerate(frames):
+        z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
+        if k < confident:
+            raws.append((f, float(z), float(a) % 360.0, 0.95, None, None))
+        else:  # the tracker wanders off as the shadows fade
+            raws.append((f, float(z) + 1.5 * (k - confident + 1), float(a) - 4.0 * (k - confident),
+                         0.01, None, None))
+    raws, circle = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
+    opts = pipeline.RunOptions()
+    for along, worst in ((circle, 0.3), (None, None)):
+        zs, azs = pipeline._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
+                                            along)
+        end = angles.sun_in_world_from_angles(zs[confident - 1], azs[confident - 1])
+        for k in range(confident, n):
+            got = angles.sun_in_world_from_angles(zs[k], azs[k])
+            if worst is not None:
+                assert error_deg(got, sun_on_its_circle(k)) < worst, k
+            # Never further from the span's end than the Sun moves (15.5
+            # deg an hour, 6 minutes a frame), whatever the raw Suns do.
+            assert angles.angle_between_deg(got, end) <= 1.55 * (k - confident + 1) + 1e-6, k
