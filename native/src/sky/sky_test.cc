@@ -102,6 +102,9 @@ TEST(SkyEvidence, BlackAndMissingFramesAreReportedNotScored) {
   EXPECT_EQ(ev.num_frames(), 2);
   EXPECT_THROW(ev.AddFrame(cv::Mat::zeros(10, 10, CV_32F)),
                std::invalid_argument);
+  SkyEvidenceOptions too_many;
+  too_many.max_samples = 70000;  // the band's sample numbers are 16-bit
+  EXPECT_THROW(too_many.Check(), std::invalid_argument);
 }
 
 // The path is the grid's: within reach of the tracker's refinement, which

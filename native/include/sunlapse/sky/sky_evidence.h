@@ -77,7 +77,8 @@ struct SkyEvidenceOptions {
   int num_directions = 3000;
   // Directions lower than this are not candidates (deg from the zenith).
   double max_zenith_deg = 88.0;
-  // Surface samples at most (a regular pixel grid over what the model covers).
+  // Surface samples at most (a regular pixel grid over what the model covers;
+  // at most 65,535).
   int max_samples = 4000;
   // Rows at the top / bottom that are not scene content (banners).
   int ignore_top_rows = 0;
