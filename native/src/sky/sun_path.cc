@@ -94,6 +94,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     const double in_min = *best_in;
     const int in_arg = static_cast<int>(best_in - in.begin());
     const double r = radius(t);
+    const double step_per_deg2 = o.step_weight / (r * r);
     // Directions are independent: in parallel (the solve is a few ms a
     // frame on long clips, after the pass, with nothing to overlap it).
     tbb::parallel_for(
@@ -109,8 +110,9 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
               if (r <= grid.cached_radius_deg()) {
                 for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
                   if (nb.angle_deg > r) break;  // nearest first
-                  const double q = nb.angle_deg / r;
-                  const double step = in[nb.index] + o.step_weight * q * q;
+                  const double step = in[nb.index] + step_per_deg2 *
+                                                         nb.angle_deg *
+                                                         nb.angle_deg;
                   if (step < c) c = step, arg = nb.index;
                 }
               } else {
