@@ -611,7 +611,8 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
     native = native_loader.require()
     north = options.north_offset_deg
     # The frames spread over the clip for the reference levels are kept in
-    # colour for the clip's shadow-free background.
+    # colour, at the unmodelled-shadow note's size, for the clip's shadow-free
+    # background.
     samples = {}
     stride = note_stride(camera)
 
@@ -633,11 +634,14 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
                             "resolution to the clip's")
 
     def open_stream(fs, near, size):
+        # The reference frames also come in colour for the note, at its size.
         try:
             return native.FrameStream(
                 clip_path, [f - source.start for f in fs],
                 native.FrameStreamOptions(gamma=GAMMA[options.method], near=near,
-                                          keep_bgr=near, width=size[0], height=size[1]))
+                                          keep_bgr=near, width=size[0], height=size[1],
+                                          bgr_width=-(-camera.width // stride),
+                                          bgr_height=-(-camera.height // stride)))
         except ValueError as e:
             raise PipelineError(f"cannot read the clip: {e}")
 
@@ -659,7 +663,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
             f = got.index + start
             if got.gray is not None:
                 if near:
-                    samples[f] = got.bgr[::stride, ::stride].copy() if stride > 1 else got.bgr
+                    samples[f] = got.bgr
                 yield f, got.gray
             elif got.status == past_end:
                 yield f, "the clip ended before this frame"

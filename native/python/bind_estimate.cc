@@ -316,6 +316,10 @@ void BindEstimate(py::module_& m) {
       .field("gamma", &FrameStreamOptions::gamma, "linear gray is value^gamma")
       .field("keep_bgr", &FrameStreamOptions::keep_bgr,
              "also hand out the uint8 BGR frame")
+      .field("bgr_width", &FrameStreamOptions::bgr_width,
+             "keep_bgr: BGR scaled to this width (0: as decoded)")
+      .field("bgr_height", &FrameStreamOptions::bgr_height,
+             "keep_bgr: BGR scaled to this height (0: as decoded)")
       .field("near", &FrameStreamOptions::near,
              "each frame the cheapest to reach at or before the one asked")
       .field("near_min_frames", &FrameStreamOptions::near_min_frames,

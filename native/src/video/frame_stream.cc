@@ -25,6 +25,10 @@ void FrameStreamOptions::Check() const {
   if (width < 0 || height < 0 || (width == 0) != (height == 0))
     throw std::invalid_argument(
         "width and height must both be > 0, or both 0 (the decoded size)");
+  if (bgr_width < 0 || bgr_height < 0 || (bgr_width == 0) != (bgr_height == 0))
+    throw std::invalid_argument(
+        "bgr_width and bgr_height must both be > 0, or both 0 (the decoded "
+        "size)");
 }
 
 struct FrameStream::Impl {
@@ -87,29 +91,28 @@ struct FrameStream::Impl {
       f.message = "the clip has no frame " + std::to_string(index + 1);
       return f;
     }
-    // Colour only when asked for: gray straight from the decoder skips
-    // the colour conversion (the luma is the gray).
+    // Colour only when asked for, and scaled as it is converted; gray from
+    // the decoder's luma (no colour conversion).
     const cv::Size size(options.width, options.height);
-    cv::Mat bgr;
-    if (!(options.keep_bgr ? reader.Read(&bgr) : reader.ReadGray(&bgr, size))) {
+    cv::Mat gray8, bgr;
+    if (!(options.keep_bgr ? reader.ReadGrayAndBgr(&gray8, size, &bgr,
+                                                   cv::Size(options.bgr_width,
+                                                            options.bgr_height))
+                           : reader.ReadGray(&gray8, size))) {
       f.message = "the clip ended before frame " + std::to_string(f.index + 1);
       return f;
     }
     f.report = reader.last_frame();
     last_near = std::max(last_near, f.index);
-    if (bgr.empty()) {
+    if (gray8.empty()) {
       f.status = StreamedFrame::Status::kUnusable;
       f.message =
           f.report.message.empty() ? "frame not decodable" : f.report.message;
       return f;
     }
     f.status = StreamedFrame::Status::kOk;
-    if (bgr.type() == CV_8UC1) {
-      f.gray = Recycled(bgr.rows, bgr.cols);
-      cv::LUT(bgr, table, f.gray);
-    } else {
-      f.gray = AreaReduced(ToLinearGray(bgr, options.gamma), size);
-    }
+    f.gray = Recycled(gray8.rows, gray8.cols);
+    cv::LUT(gray8, table, f.gray);
     if (options.keep_bgr) f.bgr = std::move(bgr);
     return f;
   }

@@ -83,6 +83,32 @@ TEST(FrameStream, ReducesFramesToTheSizeAsked) {
   EXPECT_EQ(n, 3);
 }
 
+// Colour comes scaled as it is converted, gray from the same frame at its
+// own size.
+TEST(FrameStream, GivesColourScaledAndGrayFromTheSameFrame) {
+  const Sequence seq("colour", 3);
+  FrameStreamOptions o;
+  o.keep_bgr = true;
+  o.bgr_width = 4;
+  o.bgr_height = 3;
+  o.width = 8;
+  o.height = 6;
+  FrameStream s(seq.Path(0), {2, 0}, o);
+  StreamedFrame f;
+  for (int expected : {2, 0}) {
+    ASSERT_TRUE(s.Next(&f));
+    ASSERT_EQ(f.status, StreamedFrame::Status::kOk) << f.message;
+    EXPECT_EQ(f.index, expected);
+    ASSERT_EQ(f.bgr.size(), cv::Size(4, 3));
+    ASSERT_EQ(f.gray.size(), cv::Size(8, 6));
+    EXPECT_NEAR(f.bgr.at<cv::Vec3b>(1, 1)[0], 10 * expected, 1);
+    EXPECT_NEAR(f.gray.at<float>(3, 3), Expected(expected, 2.2), 1e-6);
+  }
+  o.bgr_width = 4;
+  o.bgr_height = 0;
+  EXPECT_THROW(FrameStream(seq.Path(0), {0}, o), std::invalid_argument);
+}
+
 // Buffers are reused once the consumer lets go of them, never before.
 TEST(FrameStream, FramesTheConsumerKeepsAreNeverOverwritten) {
   const Sequence seq("keep", 12);

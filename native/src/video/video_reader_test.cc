@@ -143,6 +143,17 @@ TEST(VideoReader, ReadsGrayReducedByAreaAveraging) {
   double worst = 0;
   cv::minMaxLoc(diff, nullptr, &worst);
   EXPECT_LE(worst, 1.0);
+  // Colour scaled in the conversion itself, gray of the same frame.
+  VideoReader both_reader(path), bgr_reader(path);
+  cv::Mat gray, small_bgr, bgr;
+  ASSERT_TRUE(both_reader.ReadGrayAndBgr(&gray, cv::Size(), &small_bgr,
+                                         cv::Size(16, 12)));
+  ASSERT_TRUE(bgr_reader.Read(&bgr));
+  EXPECT_EQ(cv::norm(gray, full, cv::NORM_INF), 0.0);
+  ASSERT_EQ(small_bgr.size(), cv::Size(16, 12));
+  cv::absdiff(small_bgr, AreaReduced(bgr, cv::Size(16, 12)), diff);
+  cv::minMaxLoc(diff.reshape(1), nullptr, &worst);
+  EXPECT_LE(worst, 6.0);
 }
 
 TEST(AreaReduced, HalvingsAreOneAreaAverage) {
@@ -286,6 +297,18 @@ TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
     EXPECT_EQ(r.last_frame().index, at);
     EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * at, 4) << target;
   }
+  // Reading on after a key frame read alone gives the frames after it.
+  for (int next : {61, 62}) {
+    ASSERT_TRUE(r.Read(&f));
+    EXPECT_EQ(r.last_frame().index, next);
+    EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * next, 4);
+  }
+  ASSERT_EQ(r.SeekNear(100), 90);
+  ASSERT_TRUE(r.Seek(93));  // close ahead of a key frame read alone
+  ASSERT_TRUE(r.Read(&f));
+  EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * 93, 4);
+  ASSERT_EQ(r.SeekNear(65), 60);
+  ASSERT_TRUE(r.Read(&f));
   // The next frame is the next one, not its key frame.
   EXPECT_EQ(r.SeekNear(61), 61);
   // The container's index tells the key frames without moving the reader.

@@ -20,8 +20,10 @@ struct FrameStreamOptions {
   int queue_frames = 3;
   // Linear gray is value^gamma (ToLinearGray).
   double gamma = 2.2;
-  // Also hand out the 8-bit BGR frame (for a colour background).
+  // Also hand out the 8-bit BGR frame (for a colour background), scaled to
+  // bgr_width x bgr_height as it is converted (0 x 0: the decoded size).
   bool keep_bgr = false;
+  int bgr_width = 0, bgr_height = 0;
   // Frames need not be exact (samples spread over the clip): each is the
   // key frame at or before the index asked when that is one not handed out
   // yet (one decode after a seek, VideoReader::SeekNear), else the exact
@@ -49,7 +51,7 @@ struct StreamedFrame {
   FrameReport report;   // the reader's own report of the frame
   std::string message;  // why not, for kUnusable and kPastEnd
   cv::Mat gray;         // CV_32F linear gray (options' size), kOk only
-  cv::Mat bgr;          // CV_8UC3, kOk with keep_bgr only
+  cv::Mat bgr;          // CV_8UC3 (options' bgr size), kOk with keep_bgr only
 };
 
 // Where a pass over a clip takes its frames from, one after another.

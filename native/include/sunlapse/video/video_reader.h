@@ -71,6 +71,11 @@ class VideoReader {
   // `size`, when not empty, reduces the frame to it by area averaging
   // (AreaReduced), straight from the decoder's picture.
   bool ReadGray(cv::Mat* gray, cv::Size size = cv::Size());
+  // Both from the same frame: gray as ReadGray, and 8-bit BGR scaled to
+  // `bgr_size` (empty: as decoded) by the colour conversion itself, cheaper
+  // than converting the whole frame (4K: a fraction of the 8 Mpixel BGR).
+  bool ReadGrayAndBgr(cv::Mat* gray, cv::Size gray_size, cv::Mat* bgr,
+                      cv::Size bgr_size);
   // What the last Read() returned.
   const FrameReport& last_frame() const { return last_; }
   // Moves to 0-based frame `index`; false if out of range.
@@ -86,8 +91,17 @@ class VideoReader {
  private:
   struct Movie;
   std::string SequencePath(int index) const;
-  bool ReadSequence(cv::Mat* image, bool gray, cv::Size size);
-  bool ReadMovie(cv::Mat* image, bool gray, cv::Size size);
+  // What a read makes of a frame (outputs left null are not made).
+  struct Wanted {
+    cv::Mat* gray = nullptr;
+    cv::Size gray_size;
+    cv::Mat* bgr = nullptr;
+    cv::Size bgr_size;
+    void Release() const;
+  };
+  bool SeekFar(int index);  // a movie's seek through its key frame
+  bool ReadSequence(const Wanted& want);
+  bool ReadMovie(const Wanted& want);
 
   std::unique_ptr<Movie> movie_;
   std::string path_;
