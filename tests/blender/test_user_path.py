@@ -256,17 +256,23 @@ def test_strength_follows_the_measured_sun_ambient_ratio(estimated):
 # panel's Ground picker, one run at a time.
 
 def test_ar_insert_shadow_matches_the_footages_real_shadows(tiny_plaza, tmp_path):
-    """A tiny render of frame 2: the insert's shadow/lit ratio per channel
+    """Tiny renders of frames 1-3: the insert's shadow/lit ratio per channel
     (display values, composite over plate) within 0.05 of the real shadows'
-    in the same footage (the generator's truth masks)."""
+    in the same footage (the generator's truth masks), both averaged over
+    the three frames: at 128x96 the real shadows are 28-33 pixels a frame,
+    and their ratio alone scatters by 0.04 from frame to frame (0.60-0.64
+    in red) while the insert's stays within 0.01."""
     import ar_shadow_match
     out, truth = tiny_plaza
-    r = ar_shadow_match.render_and_measure(out, 2, str(tmp_path))
-    assert r["insert_px"] >= 30 and r["real_px"] >= 10, r
-    for c, (a, b) in enumerate(zip(r["insert"], r["real"])):
-        assert abs(a - b) <= 0.05, (c, r)
-    # The shadows are tinted as in the footage: blue kept more than red.
-    assert r["insert"][2] > r["insert"][0]
+    rs = [ar_shadow_match.render_and_measure(out, f, str(tmp_path / str(f))) for f in (1, 2, 3)]
+    for r in rs:
+        assert r["insert_px"] >= 30 and r["real_px"] >= 10, r
+        # The shadows are tinted as in the footage: blue kept more than red.
+        assert r["insert"][2] > r["insert"][0], r
+    insert = np.mean([r["insert"] for r in rs], axis=0)
+    real = np.mean([r["real"] for r in rs], axis=0)
+    assert np.all(np.abs(insert - real) <= 0.05), (insert, real)
+    r = rs[1]
     # "Two decoders": the composite shows the clip exactly as the estimate
     # reads it (the difference seen in Blender was the Filmic view
     # transform, which Set Up AR Render replaces by Standard).
