@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
-from .estimate import whole_clip
+from .estimate import circle, whole_clip
 from .core import angles, frametimes, smoothing, suncircle, sunpath, trackfile
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
@@ -508,9 +508,13 @@ def _wrong_size(image, camera) -> Optional[str]:
 # 3 deg from it, and 7 of the 759 good ones. The sky's evidence can be
 # confidently wrong over a few frames (a pole's shadow along a paving
 # joint); the Sun's path over the segment cannot bend that way, and a Sun
-# far off it must not steer the smoothing either.
+# far off it must not steer the smoothing either. The fit is trimmed
+# (estimate/circle.py): a third of a segment's Suns stuck a few degrees to
+# one side (suite scene 16's low-Sun frames) pulled a Huber fit through
+# them, and they kept their confidence. Suns within CIRCLE_INLIER_FLOOR_DEG
+# of the circle always take part in the fit (a refined Sun's own scatter).
 CIRCLE_DOUBT_DEG = 3.0
-CIRCLE_MIN_FRAMES = 8
+CIRCLE_INLIER_FLOOR_DEG = 1.5
 
 
 def _doubt_off_circle(raws, segments, frames, times, north):
@@ -521,15 +525,12 @@ def _doubt_off_circle(raws, segments, frames, times, north):
     out = list(raws)
     for seg in segments:
         ks = sorted(index[f] for f in seg)
-        use = [k for k in ks if out[k][1] is not None and out[k][3] >= 0.3]
-        if len(use) < CIRCLE_MIN_FRAMES:
-            continue
         t = [float(frames[k]) if seconds is None else seconds[k] for k in ks]
-        fit = suncircle.fit_circle(
-            t, [out[k][1] if k in use else None for k in ks],
-            [angles.azimuth_world_from_geographic(out[k][2], north) if k in use else None
-             for k in ks],
-            [max(out[k][3], 1e-3) for k in ks], times_are_seconds=seconds is not None)
+        suns = [angles.sun_in_world_from_geographic(out[k][1], out[k][2], north)
+                if out[k][1] is not None and out[k][3] >= 0.3 else None for k in ks]
+        fit = circle.fit_trimmed(t, suns, CIRCLE_INLIER_FLOOR_DEG,
+                                 [max(out[k][3], 1e-3) for k in ks],
+                                 times_are_seconds=seconds is not None)
         if not fit.success:
             continue
         for i, k in enumerate(ks):
@@ -537,8 +538,7 @@ def _doubt_off_circle(raws, segments, frames, times, north):
             if z is None:
                 continue
             raw = angles.sun_in_world_from_geographic(z, a, north)
-            fitted = angles.sun_in_world_from_angles(fit.zenith_deg[i], fit.azimuth_world_deg[i])
-            off = angles.angle_between_deg(raw, fitted)
+            off = angles.angle_between_deg(raw, fit.sun_in_world[i])
             if off > CIRCLE_DOUBT_DEG:
                 out[k] = (f, z, a, conf * (CIRCLE_DOUBT_DEG / off) ** 2, reason, res)
     return out

@@ -11,7 +11,9 @@ Frames in, raw per-frame Suns out:
    first frame whose own evidence is unmistakable;
 3. the Sun's path chosen globally (native solve_sun_path): segments where
    the capture times jump back, the frame size changes, or the evidence
-   demands a jump the times do not explain;
+   demands a jump the times do not explain; then the Sun's small circle
+   about the pole fitted to each segment's measured frames, and the path
+   chosen again with that circle as a prior where it strayed from it;
 4. each segment checked against the path: a frame whose tracked Sun is
    further from the path than the tracker can be off is read again and
    refined around the path's direction (no anchor frame, no re-acquisition
@@ -30,6 +32,9 @@ from dataclasses import dataclass, field
 from typing import Callable, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
+
+from ..core import angles
+from . import circle
 
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
@@ -71,6 +76,22 @@ UNTIMED_STEP_DEG = 12.0
 CARRIED_CONFIDENCE = 0.05
 FOLLOWED_CONFIDENCE = 0.5
 FOLLOWED_BEYOND_CONFIDENCE = 0.25
+# The Sun's circle about the pole as a prior for the path. The sky grid's
+# cells are points ~2.6 deg apart: along a long thin shadow (a pole's, low
+# Sun) a cell scores by how well its azimuth happens to match the shadow,
+# whatever its zenith, so a frame's best cell can lie 10-17 deg along the
+# shadow from the Sun (the tip, the only cue to the zenith, weighs a few
+# samples), and without capture times the path may step 12 deg a frame:
+# it zigzagged along such ridges with full margins. The Sun's path over a
+# segment is a small circle at a steady rate; fitted (robustly) to the
+# first path's measured frames, it is a prior for choosing the path again
+# where the first path strayed further than PRIOR_STRAY_DEG from it
+# (sun_path.h: prior_*). Not used on fewer than PRIOR_MIN_FRAMES measured
+# frames or when the fit's median residual exceeds PRIOR_MAX_RESIDUAL_DEG
+# (the first path too far from any circle to trust one).
+PRIOR_MIN_FRAMES = 8
+PRIOR_MAX_RESIDUAL_DEG = 3.0
+PRIOR_STRAY_DEG = 4.0
 
 
 @dataclass
@@ -122,6 +143,42 @@ def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     if n <= k:
         return list(range(n))
     return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
+
+
+def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
+    """[lo, hi) index ranges between the path's jumps and segment starts."""
+    bounds = [0] + [k for k in range(1, n) if jump_before[k]] + [n]
+    return list(zip(bounds[:-1], bounds[1:]))
+
+
+def _circle_prior(path: dict, directions: Sequence[Tuple[float, float, float]],
+                  times_s: Optional[Sequence[float]], n: int,
+                  spacing_deg: float) -> Optional[np.ndarray]:
+    """Per frame the Sun on its circle about the pole fitted (trimmed:
+    estimate/circle.py) to the path's measured frames in the frame's
+    segment ((n, 3), NaN rows where no fit holds), or None when the path
+    keeps to the fitted circles (nothing to choose again). The grid's
+    cells are the path's precision: the inlier limit never falls below a
+    grid step."""
+    prior = np.full((n, 3), np.nan)
+    strayed = False
+    for lo, hi in _segments(path["jump_before"], n):
+        ks = list(range(lo, hi))
+        suns = [directions[path["direction"][k]]
+                if path["measured"][k] and path["direction"][k] >= 0 else None for k in ks]
+        if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
+            continue
+        fit = circle.fit_trimmed([float(k) if times_s is None else float(times_s[k])
+                                  for k in ks], suns, spacing_deg,
+                                 times_are_seconds=times_s is not None)
+        if not fit.success or fit.residual_deg is None or \
+                fit.residual_deg > PRIOR_MAX_RESIDUAL_DEG:
+            continue
+        for i, k in enumerate(ks):
+            prior[k] = fit.sun_in_world[i]
+        strayed = strayed or any(off is not None and off > PRIOR_STRAY_DEG
+                                 for off in fit.off_deg)
+    return prior if strayed else None
 
 
 def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
@@ -258,6 +315,15 @@ def estimate(native, scene, camera, frames: Sequence[int],
                          for k, f in enumerate(frames)]
         result.message = path["message"]
         return result
+    t_path = time.perf_counter() - t0
+    prior = _circle_prior(path, directions, times_s, n, sky.spacing_deg)
+    t_prior = time.perf_counter() - t0
+    if prior is not None:
+        again = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
+                                      path_options, prior)
+        if again["success"]:
+            path = again
+    t_solved = time.perf_counter() - t0
     spacing = sky.spacing_deg
     bounds = [0]
     for k in range(1, n):
@@ -403,7 +469,9 @@ def estimate(native, scene, camera, frames: Sequence[int],
                      "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
                      "tracking_ms_per_frame": 1000.0 * clock["tracking"] / max(1, n),
                      "tracker_start_s": clock["start"],
-                     "check_s": t_checked - t_evidence,
+                     "path_s": t_path - t_evidence, "prior_s": t_prior - t_path,
+                     "path_again_s": t_solved - t_prior, "path_prior": prior is not None,
+                     "check_s": t_checked - t_solved,
                      "frames_read": reads["count"], "frames": n,
                      "total_s": t_end, "samples": sky.num_samples,
                      "band_entries": sky.band_entries,
