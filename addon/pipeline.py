@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Sequence
 
 from . import acquire, native_loader
-from .estimate import circle, whole_clip
-from .core import angles, frametimes, smoothing, suncircle, sunpath, trackfile
+from .estimate import whole_clip
+from .core import angles, frametimes, smoothing, suncircle, sunpath, trackfile, trimmed_circle
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -509,7 +509,7 @@ def _wrong_size(image, camera) -> Optional[str]:
 # confidently wrong over a few frames (a pole's shadow along a paving
 # joint); the Sun's path over the segment cannot bend that way, and a Sun
 # far off it must not steer the smoothing either. The fit is trimmed
-# (estimate/circle.py): a third of a segment's Suns stuck a few degrees to
+# (core/trimmed_circle.py): a third of a segment's Suns stuck a few degrees to
 # one side (suite scene 16's low-Sun frames) pulled a Huber fit through
 # them, and they kept their confidence. Suns within CIRCLE_INLIER_FLOOR_DEG
 # of the circle always take part in the fit (a refined Sun's own scatter).
@@ -528,9 +528,10 @@ def _doubt_off_circle(raws, segments, frames, times, north):
         t = [float(frames[k]) if seconds is None else seconds[k] for k in ks]
         suns = [angles.sun_in_world_from_geographic(out[k][1], out[k][2], north)
                 if out[k][1] is not None and out[k][3] >= 0.3 else None for k in ks]
-        fit = circle.fit_trimmed(t, suns, CIRCLE_INLIER_FLOOR_DEG,
-                                 [max(out[k][3], 1e-3) for k in ks],
-                                 times_are_seconds=seconds is not None)
+        fit = trimmed_circle.fit_trimmed(t, suns, CIRCLE_INLIER_FLOOR_DEG,
+                                         [max(out[k][3], 1e-3) for k in ks],
+                                         times_are_seconds=seconds is not None,
+                                         settle_deg=CIRCLE_DOUBT_DEG)
         if not fit.success:
             continue
         for i, k in enumerate(ks):
@@ -610,7 +611,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
             native, scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
             ignore_top_rows=options.ignore_top_rows,
             progress=None if progress is None else (lambda x: progress(0.95 * x)),
-            stream=stream, source=frame_source)
+            stream=stream, source=frame_source, fit_circle=trimmed_circle.fit_trimmed)
     except whole_clip.Cancelled:
         raise PipelineError("cancelled")
     track.method["initial"] = track.method["tracking"] = "whole_clip"

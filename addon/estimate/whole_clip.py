@@ -29,12 +29,9 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
-
-from ..core import angles
-from . import circle
 
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
@@ -83,12 +80,13 @@ FOLLOWED_BEYOND_CONFIDENCE = 0.25
 # shadow from the Sun (the tip, the only cue to the zenith, weighs a few
 # samples), and without capture times the path may step 12 deg a frame:
 # it zigzagged along such ridges with full margins. The Sun's path over a
-# segment is a small circle at a steady rate; fitted (robustly) to the
-# first path's measured frames, it is a prior for choosing the path again
-# where the first path strayed further than PRIOR_STRAY_DEG from it
-# (sun_path.h: prior_*). Not used on fewer than PRIOR_MIN_FRAMES measured
-# frames or when the fit's median residual exceeds PRIOR_MAX_RESIDUAL_DEG
-# (the first path too far from any circle to trust one).
+# segment is a small circle at a steady rate; fitted (trimmed:
+# core/trimmed_circle.py) to the first path's measured frames, it is a
+# prior for choosing the path again where the first path strayed further
+# than PRIOR_STRAY_DEG from it (sun_path.h: prior_*). Not used on fewer
+# than PRIOR_MIN_FRAMES measured frames or when the fit's median residual
+# exceeds PRIOR_MAX_RESIDUAL_DEG (the first path too far from any circle
+# to trust one).
 PRIOR_MIN_FRAMES = 8
 PRIOR_MAX_RESIDUAL_DEG = 3.0
 PRIOR_STRAY_DEG = 4.0
@@ -151,12 +149,13 @@ def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
     return list(zip(bounds[:-1], bounds[1:]))
 
 
-def _circle_prior(path: dict, directions: Sequence[Tuple[float, float, float]],
+def _circle_prior(fit_circle: Callable[..., Any], path: dict,
+                  directions: Sequence[Sequence[float]],
                   times_s: Optional[Sequence[float]], n: int,
                   spacing_deg: float) -> Optional[np.ndarray]:
-    """Per frame the Sun on its circle about the pole fitted (trimmed:
-    estimate/circle.py) to the path's measured frames in the frame's
-    segment ((n, 3), NaN rows where no fit holds), or None when the path
+    """Per frame the Sun on its circle about the pole fitted (fit_circle:
+    core/trimmed_circle.py's fit_trimmed) to the path's measured frames in
+    the frame's segment ((n, 3), NaN rows where no fit holds), or None when the path
     keeps to the fitted circles (nothing to choose again). The grid's
     cells are the path's precision: the inlier limit never falls below a
     grid step."""
@@ -168,9 +167,9 @@ def _circle_prior(path: dict, directions: Sequence[Tuple[float, float, float]],
                 if path["measured"][k] and path["direction"][k] >= 0 else None for k in ks]
         if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
             continue
-        fit = circle.fit_trimmed([float(k) if times_s is None else float(times_s[k])
-                                  for k in ks], suns, spacing_deg,
-                                 times_are_seconds=times_s is not None)
+        times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
+        fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None,
+                         settle_deg=PRIOR_STRAY_DEG)
         if not fit.success or fit.residual_deg is None or \
                 fit.residual_deg > PRIOR_MAX_RESIDUAL_DEG:
             continue
@@ -194,7 +193,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
              ignore_top_rows: int = 0,
              progress: Optional[Callable[[float], object]] = None,
              stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None,
-             source: Optional[Callable[[Sequence[int]], Tuple[object, dict]]] = None
+             source: Optional[Callable[[Sequence[int]], Tuple[object, dict]]] = None,
+             fit_circle: Optional[Callable[..., Any]] = None
              ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
@@ -208,8 +208,10 @@ def estimate(native, scene, camera, frames: Sequence[int],
     ahead, {frame: the index it reports for it}) for the pass over the clip;
     without them the frames are read with read_gray, and the pass's held in
     memory (tests, synthetic clips). `times_s`: capture times in seconds
-    (None when unknown). `native`: the compiled module (passed in, so this
-    controller imports nothing of the add-on's package)."""
+    (None when unknown). `native`: the compiled module, and `fit_circle`:
+    the trimmed fit of the Sun's circle (core/trimmed_circle.py's
+    fit_trimmed; None: the path gets no circle prior), passed in, so this
+    controller imports nothing of the add-on's package."""
     frames = list(frames)
     n = len(frames)
     result = WholeClipResult()
@@ -316,7 +318,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
         result.message = path["message"]
         return result
     t_path = time.perf_counter() - t0
-    prior = _circle_prior(path, directions, times_s, n, sky.spacing_deg)
+    prior = None if fit_circle is None else _circle_prior(
+        fit_circle, path, directions, times_s, n, sky.spacing_deg)
     t_prior = time.perf_counter() - t0
     if prior is not None:
         again = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,

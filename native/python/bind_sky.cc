@@ -133,9 +133,9 @@ void BindSky(py::module_& m) {
          const py::object& prior_in) {
         std::vector<Eigen::Vector3d> prior;
         if (!prior_in.is_none()) {
-          const auto a = py::array_t<double, py::array::c_style |
-                                                 py::array::forcecast>::
-              ensure(prior_in);
+          const auto a =
+              py::array_t<double, py::array::c_style |
+                                      py::array::forcecast>::ensure(prior_in);
           if (!a || a.ndim() != 2 || a.shape(1) != 3)
             throw py::value_error(
                 "prior: expected an (N, 3) array of directions toward the Sun "

@@ -85,17 +85,19 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     const Eigen::Vector3d u = prior[t].normalized();
     prior_cost[t].resize(D);
     for (int d = 0; d < D; ++d) {
-      const double off =
-          std::atan2(grid.direction(d).cross(u).norm(), grid.direction(d).dot(u)) /
-              kDeg -
-          o.prior_tolerance_deg;
+      const double off = std::atan2(grid.direction(d).cross(u).norm(),
+                                    grid.direction(d).dot(u)) /
+                             kDeg -
+                         o.prior_tolerance_deg;
       prior_cost[t][d] = static_cast<float>(
-          off <= 0 ? 0.0 : std::min(o.prior_max_cost, o.prior_weight * off * off));
+          off <= 0 ? 0.0
+                   : std::min(o.prior_max_cost, o.prior_weight * off * off));
     }
   }
   auto cost_of = [&](int t, int d) {
     const double c = evidence_cost(t, d);
-    return prior_cost.empty() || prior_cost[t].empty() ? c : c + prior_cost[t][d];
+    return prior_cost.empty() || prior_cost[t].empty() ? c
+                                                       : c + prior_cost[t][d];
   };
   bool any = false;
   for (int t = 0; t < T && !any; ++t) any = evidence.Significance(t) > 0.0;
