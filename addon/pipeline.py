@@ -530,8 +530,7 @@ def _doubt_off_circle(raws, segments, frames, times, north):
                 if out[k][1] is not None and out[k][3] >= 0.3 else None for k in ks]
         fit = trimmed_circle.fit_trimmed(t, suns, CIRCLE_INLIER_FLOOR_DEG,
                                          [max(out[k][3], 1e-3) for k in ks],
-                                         times_are_seconds=seconds is not None,
-                                         settle_deg=CIRCLE_DOUBT_DEG)
+                                         times_are_seconds=seconds is not None)
         if not fit.success:
             continue
         for i, k in enumerate(ks):

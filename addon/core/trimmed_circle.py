@@ -67,14 +67,10 @@ def _spread(items: Sequence[int], k: int) -> List[int]:
 
 def fit_trimmed(times: Sequence[float], suns_in_world: Sequence[Optional[Sequence[float]]],
                 floor_deg: float, weights: Optional[Sequence[float]] = None,
-                times_are_seconds: bool = True,
-                settle_deg: Optional[float] = None) -> TrimmedFit:
+                times_are_seconds: bool = True) -> TrimmedFit:
     """The circle through the given Suns (unit vectors, world frame; None:
     no Sun at that time), the far ones left out as the module says.
-    `floor_deg`: the inlier limit never falls below this (deg).
-    `settle_deg`: when every Sun is within this of the first start's circle
-    (nothing the caller acts on is off it), the other starts are not tried
-    (they cost ~5 fits)."""
+    `floor_deg`: the inlier limit never falls below this (deg)."""
     out = TrimmedFit()
     n = len(times)
     given = [i for i in range(n) if suns_in_world[i] is not None]
@@ -127,9 +123,10 @@ def fit_trimmed(times: Sequence[float], suns_in_world: Sequence[Optional[Sequenc
         return c[1] is not None and len(c[0]) >= MIN_INLIER_SHARE * len(use)
 
     tried = [trim(use)]
-    settled = settle_deg is not None and tried[0][1] is not None and \
-        max(tried[0][2].values()) <= settle_deg
-    if len(tried[0][0]) < len(use) and not settled:
+    # (Skipping them when every Sun is within a few degrees of the first
+    # start's circle saved 25 ms a run but kept the bent circles: they hold
+    # the wrong Suns within a few degrees, which is how they fail.)
+    if len(tried[0][0]) < len(use):
         half = len(use) // 2
         tried += [trim(start) for start in (use[:half], use[half:]) if len(start) >= MIN_FRAMES]
     tried = [c for c in tried if holds_half(c)]

@@ -168,8 +168,7 @@ def _circle_prior(fit_circle: Callable[..., Any], path: dict,
         if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
             continue
         times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
-        fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None,
-                         settle_deg=PRIOR_STRAY_DEG)
+        fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None)
         if not fit.success or fit.residual_deg is None or \
                 fit.residual_deg > PRIOR_MAX_RESIDUAL_DEG:
             continue
@@ -178,6 +177,31 @@ def _circle_prior(fit_circle: Callable[..., Any], path: dict,
         strayed = strayed or any(off is not None and off > PRIOR_STRAY_DEG
                                  for off in fit.off_deg)
     return prior if strayed else None
+
+
+def _evidence_support(first: dict, again: dict,
+                      directions: Sequence[Sequence[float]], spacing_deg: float) -> List[float]:
+    """Per frame the path margin that the frames' confidence is built on,
+    after the path was chosen again under the circle prior. The prior is
+    fitted to the other frames' evidence: counted in the margin it would
+    count them twice (indoor_window's first frames, 2 deg off, rose from
+    confidence 0.4 to 0.9). Where the path kept its direction (within a
+    grid cell and a half), the first path's margin (evidence only) caps
+    it; where the prior moved it, the frame's evidence chose otherwise: the
+    direction rests on the circle, i.e. on the other frames, and gets at
+    most half the support (FOLLOWED_CONFIDENCE, as frames the tracker
+    follows between frames with evidence; none left it at confidence 0 and
+    let a wrong neighbour steer the smoothing)."""
+    out = []
+    for k, margin in enumerate(again["path_margin"]):
+        d1, d2 = first["direction"][k], again["direction"][k]
+        if d1 < 0 or d2 < 0:
+            out.append(float(margin))
+        elif _angle_deg(directions[d1], directions[d2]) <= 1.5 * spacing_deg:
+            out.append(min(float(margin), float(first["path_margin"][k])))
+        else:
+            out.append(min(float(margin), FOLLOWED_CONFIDENCE * FULL_CONFIDENCE_MARGIN))
+    return out
 
 
 def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
@@ -325,7 +349,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
         again = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
                                       path_options, prior)
         if again["success"]:
-            path = again
+            path = dict(again, path_margin=_evidence_support(path, again, directions,
+                                                             sky.spacing_deg))
     t_solved = time.perf_counter() - t0
     spacing = sky.spacing_deg
     bounds = [0]
