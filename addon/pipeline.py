@@ -454,7 +454,8 @@ def _finish(native, track, raws, options, times, progress, segments, pixel_scale
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         zs, azs = _smooth_segments(numbers, raws, segments, mode, options, times)
     for k, ((f, z, a, conf, reason, res), zs_f, as_f) in enumerate(zip(raws, zs, azs)):
-        est = trackfile.FrameEstimate(frame=f, zenith_deg=zs_f, azimuth_deg=as_f,
+        est = trackfile.FrameEstimate(frame=f, zenith_deg=_settled(zs_f),
+                                      azimuth_deg=_settled(as_f),
                                       raw_zenith_deg=z, raw_azimuth_deg=a,
                                       confidence=conf, reason=reason,
                                       time_utc=None if times is None else times[k].isoformat())
@@ -464,6 +465,17 @@ def _finish(native, track, raws, options, times, progress, segments, pixel_scale
         if res is not None and z is not None and 0 < res.contrast < 100:
             est.sun_ambient_ratio = res.contrast
         track.frames.append(est)
+
+
+# Smoothed angles are written to this many decimals (deg): numpy's sums
+# round differently with the arrays' alignment in memory, so the same
+# smoothing of the same raw angles differed in the last bit between runs
+# (1 in 3 runs of the March Marseille clip: test_faults' byte-compare).
+SMOOTHED_DECIMALS = 9
+
+
+def _settled(angle_deg):
+    return None if angle_deg is None else round(float(angle_deg), SMOOTHED_DECIMALS)
 
 
 def _smooth_segments(numbers, raws, segments, mode, options, times):
