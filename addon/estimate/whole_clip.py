@@ -11,7 +11,9 @@ Frames in, raw per-frame Suns out:
    first frame whose own evidence is unmistakable;
 3. the Sun's path chosen globally (native solve_sun_path): segments where
    the capture times jump back, the frame size changes, or the evidence
-   demands a jump the times do not explain;
+   demands a jump the times do not explain; then the Sun's small circle
+   about the pole fitted to each segment's measured frames, and the path
+   chosen again with that circle as a prior where it strayed from it;
 4. each segment checked against the path: a frame whose tracked Sun is
    further from the path than the tracker can be off is read again and
    refined around the path's direction (no anchor frame, no re-acquisition
@@ -27,7 +29,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -74,6 +76,23 @@ UNTIMED_STEP_DEG = 12.0
 CARRIED_CONFIDENCE = 0.05
 FOLLOWED_CONFIDENCE = 0.5
 FOLLOWED_BEYOND_CONFIDENCE = 0.25
+# The Sun's circle about the pole as a prior for the path. The sky grid's
+# cells are points ~2.6 deg apart: along a long thin shadow (a pole's, low
+# Sun) a cell scores by how well its azimuth happens to match the shadow,
+# whatever its zenith, so a frame's best cell can lie 10-17 deg along the
+# shadow from the Sun (the tip, the only cue to the zenith, weighs a few
+# samples), and without capture times the path may step 12 deg a frame:
+# it zigzagged along such ridges with full margins. The Sun's path over a
+# segment is a small circle at a steady rate; fitted (trimmed:
+# core/trimmed_circle.py) to the first path's measured frames, it is a
+# prior for choosing the path again where the first path strayed further
+# than PRIOR_STRAY_DEG from it (sun_path.h: prior_*). Not used on fewer
+# than PRIOR_MIN_FRAMES measured frames or when the fit's median residual
+# exceeds PRIOR_MAX_RESIDUAL_DEG (the first path too far from any circle
+# to trust one).
+PRIOR_MIN_FRAMES = 8
+PRIOR_MAX_RESIDUAL_DEG = 3.0
+PRIOR_STRAY_DEG = 4.0
 
 
 @dataclass
@@ -136,6 +155,67 @@ def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
     return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
 
 
+def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
+    """[lo, hi) index ranges between the path's jumps and segment starts."""
+    bounds = [0] + [k for k in range(1, n) if jump_before[k]] + [n]
+    return list(zip(bounds[:-1], bounds[1:]))
+
+
+def _circle_prior(fit_circle: Callable[..., Any], path: dict,
+                  directions: Sequence[Sequence[float]],
+                  times_s: Optional[Sequence[float]], n: int,
+                  spacing_deg: float) -> Optional[np.ndarray]:
+    """Per frame the Sun on its circle about the pole fitted (fit_circle:
+    core/trimmed_circle.py's fit_trimmed) to the path's measured frames in
+    the frame's segment ((n, 3), NaN rows where no fit holds), or None when the path
+    keeps to the fitted circles (nothing to choose again). The grid's
+    cells are the path's precision: the inlier limit never falls below a
+    grid step."""
+    prior = np.full((n, 3), np.nan)
+    strayed = False
+    for lo, hi in _segments(path["jump_before"], n):
+        ks = list(range(lo, hi))
+        suns = [directions[path["direction"][k]]
+                if path["measured"][k] and path["direction"][k] >= 0 else None for k in ks]
+        if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
+            continue
+        times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
+        fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None)
+        if not fit.success or fit.residual_deg is None or \
+                fit.residual_deg > PRIOR_MAX_RESIDUAL_DEG:
+            continue
+        for i, k in enumerate(ks):
+            prior[k] = fit.sun_in_world[i]
+        strayed = strayed or any(off is not None and off > PRIOR_STRAY_DEG
+                                 for off in fit.off_deg)
+    return prior if strayed else None
+
+
+def _evidence_support(first: dict, again: dict,
+                      directions: Sequence[Sequence[float]], spacing_deg: float) -> List[float]:
+    """Per frame the path margin that the frames' confidence is built on,
+    after the path was chosen again under the circle prior. The prior is
+    fitted to the other frames' evidence: counted in the margin it would
+    count them twice (indoor_window's first frames, 2 deg off, rose from
+    confidence 0.4 to 0.9). Where the path kept its direction (within a
+    grid cell and a half), the first path's margin (evidence only) caps
+    it; where the prior moved it, the frame's evidence chose otherwise: the
+    direction rests on the circle, i.e. on the other frames, and gets at
+    most half the support (FOLLOWED_CONFIDENCE, as frames the tracker
+    follows between frames with evidence; none left it at confidence 0 and
+    let a wrong neighbour steer the smoothing)."""
+    out = []
+    for k, margin in enumerate(again["path_margin"]):
+        d1, d2 = first["direction"][k], again["direction"][k]
+        if d1 < 0 or d2 < 0:
+            out.append(float(margin))
+        elif _angle_deg(directions[d1], directions[d2]) <= 1.5 * spacing_deg:
+            out.append(min(float(margin), float(first["path_margin"][k])))
+        else:
+            out.append(min(float(margin), FOLLOWED_CONFIDENCE * FULL_CONFIDENCE_MARGIN))
+    return out
+
+
 def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
     return read if isinstance(read, np.ndarray) else None
 
@@ -151,7 +231,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
              ignore_top_rows: int = 0,
              progress: Optional[Callable[[float], object]] = None,
              stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None,
-             source: Optional[SourceFn] = None
+             source: Optional[SourceFn] = None,
+             fit_circle: Optional[Callable[..., Any]] = None
              ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
@@ -166,8 +247,10 @@ def estimate(native, scene, camera, frames: Sequence[int],
     ahead, {frame: the index it reports for it}) for the pass over the clip;
     without them the frames are read with read_gray, and the pass's held in
     memory (tests, synthetic clips). `times_s`: capture times in seconds
-    (None when unknown). `native`: the compiled module (passed in, so this
-    controller imports nothing of the add-on's package)."""
+    (None when unknown). `native`: the compiled module, and `fit_circle`:
+    the trimmed fit of the Sun's circle (core/trimmed_circle.py's
+    fit_trimmed; None: the path gets no circle prior), passed in, so this
+    controller imports nothing of the add-on's package."""
     frames = list(frames)
     n = len(frames)
     result = WholeClipResult()
@@ -284,6 +367,17 @@ def estimate(native, scene, camera, frames: Sequence[int],
                          for k, f in enumerate(frames)]
         result.message = path["message"]
         return result
+    t_path = time.perf_counter() - t0
+    prior = None if fit_circle is None else _circle_prior(
+        fit_circle, path, directions, times_s, n, sky.spacing_deg)
+    t_prior = time.perf_counter() - t0
+    if prior is not None:
+        again = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
+                                      path_options, prior)
+        if again["success"]:
+            path = dict(again, path_margin=_evidence_support(path, again, directions,
+                                                             sky.spacing_deg))
+    t_solved = time.perf_counter() - t0
     spacing = sky.spacing_deg
     bounds = [0]
     for k in range(1, n):
@@ -429,7 +523,9 @@ def estimate(native, scene, camera, frames: Sequence[int],
                      "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
                      "tracking_ms_per_frame": 1000.0 * clock["tracking"] / max(1, n),
                      "tracker_start_s": clock["start"],
-                     "check_s": t_checked - t_evidence,
+                     "path_s": t_path - t_evidence, "prior_s": t_prior - t_path,
+                     "path_again_s": t_solved - t_prior, "path_prior": prior is not None,
+                     "check_s": t_checked - t_solved,
                      "frames_read": reads["count"], "frames": n,
                      "total_s": t_end, "samples": sky.num_samples,
                      "band_entries": sky.band_entries,

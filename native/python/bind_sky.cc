@@ -48,6 +48,10 @@ void BindSky(py::module_& m) {
       .def_readwrite("min_margin", &SunPathOptions::min_margin)
       .def_readwrite("rival_exclusion_deg",
                      &SunPathOptions::rival_exclusion_deg)
+      .def_readwrite("prior_tolerance_deg",
+                     &SunPathOptions::prior_tolerance_deg)
+      .def_readwrite("prior_weight", &SunPathOptions::prior_weight)
+      .def_readwrite("prior_max_cost", &SunPathOptions::prior_max_cost)
       .def("check", &SunPathOptions::Check);
 
   py::enum_<FrameEvidence::Status>(m, "FrameEvidenceStatus")
@@ -125,11 +129,25 @@ void BindSky(py::module_& m) {
   m.def(
       "solve_sun_path",
       [](const SkyEvidence& e, const std::vector<double>& times_s,
-         const std::vector<uint8_t>& segment_start, const SunPathOptions& o) {
+         const std::vector<uint8_t>& segment_start, const SunPathOptions& o,
+         const py::object& prior_in) {
+        std::vector<Eigen::Vector3d> prior;
+        if (!prior_in.is_none()) {
+          const auto a =
+              py::array_t<double, py::array::c_style |
+                                      py::array::forcecast>::ensure(prior_in);
+          if (!a || a.ndim() != 2 || a.shape(1) != 3)
+            throw py::value_error(
+                "prior: expected an (N, 3) array of directions toward the Sun "
+                "(NaN rows: none), or None");
+          const auto v = a.unchecked<2>();
+          for (py::ssize_t i = 0; i < a.shape(0); ++i)
+            prior.emplace_back(v(i, 0), v(i, 1), v(i, 2));
+        }
         SunPathResult r;
         {
           py::gil_scoped_release release;
-          r = SolveSunPath(e, times_s, segment_start, o);
+          r = SolveSunPath(e, times_s, segment_start, o, prior);
         }
         py::dict out;
         out["success"] = r.status == SunPathResult::Status::kSuccess;
@@ -148,10 +166,11 @@ void BindSky(py::module_& m) {
       },
       py::arg("evidence"), py::arg("times_s") = std::vector<double>(),
       py::arg("segment_start") = std::vector<uint8_t>(),
-      py::arg("options") = SunPathOptions(),
+      py::arg("options") = SunPathOptions(), py::arg("prior") = py::none(),
       "The Sun's path over the evidence's frames (sun_path.h): per frame a "
       "grid direction, "
-      "jump flags, whether the frame's evidence supports it.");
+      "jump flags, whether the frame's evidence supports it. prior: None or "
+      "(N, 3) directions toward the Sun per frame (NaN rows: none).");
 }
 
 }  // namespace sunlapse::python

@@ -211,5 +211,55 @@ TEST(SunPath, KnownTimesBoundTheStepAndSegmentsRestart) {
                std::invalid_argument);
 }
 
+// A run of frames whose evidence points 15 deg from the Sun (as the sky
+// grid's ridge along a long thin shadow does on low-Sun frames): without a
+// prior the path follows them; with the Sun's circle as the prior it stays
+// with the Sun, and the frames' own margins still say their evidence
+// disagrees (a prior does not make a frame measured).
+TEST(SunPath, APriorHoldsThePathAgainstMisleadingFrames) {
+  const int n = 16;
+  Clip clip(n);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(Spread(clip.frames, 8));
+  const std::vector<int> misled = {5, 6, 7, 8};
+  for (int f = 0; f < n; ++f) {
+    const bool bad = std::find(misled.begin(), misled.end(), f) != misled.end();
+    if (!bad) {
+      ev.AddFrame(clip.frames[f]);
+      continue;
+    }
+    double zenith, azimuth;
+    AnglesFromSunInWorld(clip.truth[f], &zenith, &azimuth);
+    ev.AddFrame(testing::RenderLambertian(clip.scene, clip.cam,
+                                          Sun(zenith + 15.0, azimuth),
+                                          testing::TexturedGround(f + 1)));
+  }
+  const SunPathResult plain = SolveSunPath(ev, {}, {}, SunPathOptions());
+  const SunPathResult held =
+      SolveSunPath(ev, {}, {}, SunPathOptions(), clip.truth);
+  ASSERT_EQ(plain.status, SunPathResult::Status::kSuccess);
+  ASSERT_EQ(held.status, SunPathResult::Status::kSuccess);
+  for (int f : misled) {
+    EXPECT_GT(PathError(ev, plain, clip.truth, f), 10.0) << "frame " << f;
+    EXPECT_LT(PathError(ev, held, clip.truth, f), 1.5 * ev.grid().spacing_deg())
+        << "frame " << f;
+    EXPECT_FALSE(held.measured[f]) << "frame " << f;
+  }
+  for (int f = 0; f < n; ++f) {
+    EXPECT_LT(PathError(ev, held, clip.truth, f), kPathToleranceDeg)
+        << "frame " << f;
+  }
+  // A prior that costs nothing changes nothing.
+  SunPathOptions free;
+  free.prior_max_cost = 0.0;
+  const SunPathResult same = SolveSunPath(ev, {}, {}, free, clip.truth);
+  EXPECT_EQ(same.direction, plain.direction);
+  EXPECT_THROW(SolveSunPath(ev, {}, {}, SunPathOptions(), {clip.truth[0]}),
+               std::invalid_argument);
+  SunPathOptions bad;
+  bad.prior_weight = -1.0;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace sunlapse

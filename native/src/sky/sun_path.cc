@@ -36,12 +36,19 @@ void SunPathOptions::Check() const {
           "min_margin must be >= 0");
   Require(rival_exclusion_deg >= 0 && rival_exclusion_deg <= 90,
           "rival_exclusion_deg must be in [0, 90]");
+  Require(prior_tolerance_deg >= 0 && std::isfinite(prior_tolerance_deg),
+          "prior_tolerance_deg must be >= 0");
+  Require(prior_weight >= 0 && std::isfinite(prior_weight),
+          "prior_weight must be >= 0");
+  Require(prior_max_cost >= 0 && std::isfinite(prior_max_cost),
+          "prior_max_cost must be >= 0");
 }
 
 SunPathResult SolveSunPath(const SkyEvidence& evidence,
                            const std::vector<double>& times_s,
                            const std::vector<uint8_t>& segment_start,
-                           const SunPathOptions& o) {
+                           const SunPathOptions& o,
+                           const std::vector<Eigen::Vector3d>& prior) {
   o.Check();
   const int T = evidence.num_frames();
   const SkyGrid& grid = evidence.grid();
@@ -50,6 +57,8 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
           "times_s: one time per frame, or none");
   Require(segment_start.empty() || static_cast<int>(segment_start.size()) == T,
           "segment_start: one flag per frame, or none");
+  Require(prior.empty() || static_cast<int>(prior.size()) == T,
+          "prior: one direction per frame, or none");
   SunPathResult out;
   out.direction.assign(T, -1);
   out.jump_before.assign(T, 0);
@@ -65,8 +74,30 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   const std::vector<uint8_t>& scores = evidence.scores();
   // Each frame's cost of a direction, relative to the frame's best (0 there;
   // 0 everywhere on a frame without evidence, which is then carried).
-  auto cost_of = [&](int t, int d) {
+  auto evidence_cost = [&](int t, int d) {
     return scores[static_cast<size_t>(t) * D + d] / 10.0;
+  };
+  // The prior's cost per frame and direction, in the evidence's units
+  // (empty rows: no prior on that frame).
+  std::vector<std::vector<float>> prior_cost(prior.empty() ? 0 : T);
+  for (int t = 0; t < static_cast<int>(prior_cost.size()); ++t) {
+    if (!prior[t].allFinite() || prior[t].norm() < 0.5) continue;
+    const Eigen::Vector3d u = prior[t].normalized();
+    prior_cost[t].resize(D);
+    for (int d = 0; d < D; ++d) {
+      const double off = std::atan2(grid.direction(d).cross(u).norm(),
+                                    grid.direction(d).dot(u)) /
+                             kDeg -
+                         o.prior_tolerance_deg;
+      prior_cost[t][d] = static_cast<float>(
+          off <= 0 ? 0.0
+                   : std::min(o.prior_max_cost, o.prior_weight * off * off));
+    }
+  }
+  auto cost_of = [&](int t, int d) {
+    const double c = evidence_cost(t, d);
+    return prior_cost.empty() || prior_cost[t].empty() ? c
+                                                       : c + prior_cost[t][d];
   };
   bool any = false;
   for (int t = 0; t < T && !any; ++t) any = evidence.Significance(t) > 0.0;
@@ -226,11 +257,11 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   // more the best direction well away from it costs (log-likelihood).
   for (int t = 0; t < T; ++t) {
     const int c = out.direction[t];
-    const double own = cost_of(t, c);
+    const double own = evidence_cost(t, c);
     double rival = 1e9;
     for (int k = 0; k < D; ++k) {
       if (grid.direction(k).dot(grid.direction(c)) < cos_x)
-        rival = std::min(rival, cost_of(t, k));
+        rival = std::min(rival, evidence_cost(t, k));
     }
     out.explained[t] = static_cast<float>(evidence.BestExplained(t));
     out.significance[t] = static_cast<float>(evidence.Significance(t));

@@ -39,6 +39,16 @@ struct SunPathOptions {
   double min_significance = 4.0;
   double min_margin = 2.0;
   double rival_exclusion_deg = 12.0;
+  // A prior direction per frame (SolveSunPath's `prior`, e.g. the Sun's
+  // small circle about the pole fitted to a first path): a direction further
+  // than prior_tolerance_deg from it costs prior_weight per squared degree
+  // beyond, at most prior_max_cost (log-likelihood units, as a frame's
+  // evidence: sky_evidence.h clips those at 25.5). The sky's evidence along
+  // a long thin shadow ranks grid cells by how well their azimuth matches
+  // it, whatever their zenith; the Sun's path over the clip does not zigzag.
+  double prior_tolerance_deg = 2.0;
+  double prior_weight = 1.0;
+  double prior_max_cost = 25.0;
 
   void Check() const;
 };
@@ -71,10 +81,15 @@ struct SunPathResult {
 
 // frames: the evidence's frames in order; times_s: each frame's capture time
 // in seconds (NaN when unknown); segment_start: 1 where the caller knows the
-// clip jumps (capture times going back, a cut) and no step is taken.
+// clip jumps (capture times going back, a cut) and no step is taken;
+// prior: none, or one unit vector toward the Sun per frame in the world
+// frame (a non-finite one: no prior on that frame), added to the frames'
+// costs as options.prior_* say. Margins and `measured` stay the evidence's
+// own; path_margin includes the prior.
 SunPathResult SolveSunPath(const SkyEvidence& evidence,
                            const std::vector<double>& times_s,
                            const std::vector<uint8_t>& segment_start,
-                           const SunPathOptions& options);
+                           const SunPathOptions& options,
+                           const std::vector<Eigen::Vector3d>& prior = {});
 
 }  // namespace sunlapse
