@@ -77,27 +77,26 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   auto evidence_cost = [&](int t, int d) {
     return scores[static_cast<size_t>(t) * D + d] / 10.0;
   };
-  // The prior's cost per frame and direction, in the evidence's units
-  // (empty rows: no prior on that frame).
-  std::vector<std::vector<float>> prior_cost(prior.empty() ? 0 : T);
-  for (int t = 0; t < static_cast<int>(prior_cost.size()); ++t) {
-    if (!prior[t].allFinite() || prior[t].norm() < 0.5) continue;
-    const Eigen::Vector3d u = prior[t].normalized();
-    prior_cost[t].resize(D);
-    for (int d = 0; d < D; ++d) {
-      const double off = std::atan2(grid.direction(d).cross(u).norm(),
-                                    grid.direction(d).dot(u)) /
-                             kDeg -
-                         o.prior_tolerance_deg;
-      prior_cost[t][d] = static_cast<float>(
-          off <= 0 ? 0.0
-                   : std::min(o.prior_max_cost, o.prior_weight * off * off));
-    }
+  // The prior's cost of a direction on a frame, in the evidence's units,
+  // from its angle to the frame's prior direction (none: no prior there).
+  // Computed when asked, not stored: a table of frames x directions would
+  // make the solve's memory grow with the clip (120 MB at 10,000 frames).
+  std::vector<Eigen::Vector3d> prior_unit(prior.empty() ? 0 : T,
+                                          Eigen::Vector3d::Zero());
+  for (int t = 0; t < static_cast<int>(prior_unit.size()); ++t) {
+    if (prior[t].allFinite() && prior[t].norm() >= 0.5)
+      prior_unit[t] = prior[t].normalized();
   }
   auto cost_of = [&](int t, int d) {
     const double c = evidence_cost(t, d);
-    return prior_cost.empty() || prior_cost[t].empty() ? c
-                                                       : c + prior_cost[t][d];
+    if (prior_unit.empty() || prior_unit[t].isZero()) return c;
+    const double off =
+        std::acos(std::clamp(grid.direction(d).dot(prior_unit[t]), -1.0, 1.0)) /
+            kDeg -
+        o.prior_tolerance_deg;
+    return off <= 0
+               ? c
+               : c + std::min(o.prior_max_cost, o.prior_weight * off * off);
   };
   bool any = false;
   for (int t = 0; t < T && !any; ++t) any = evidence.Significance(t) > 0.0;
