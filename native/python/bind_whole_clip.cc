@@ -38,7 +38,9 @@ void BindWholeClip(py::module_& m) {
                              })
       .def_property_readonly("gray", [](const ClipPassFrame& f) -> py::object {
         if (f.gray.empty()) return py::none();
-        return MatAsArray(f.gray);
+        cv::Mat g;
+        f.gray.convertTo(g, CV_32F);
+        return MatAsArray(std::move(g));
       });
 
   m.def(

@@ -59,7 +59,6 @@ ClipPassResult RunClipPass(FrameSource* source,
   const SkyGrid& grid = sky->grid();
   bool following = false;
   int kept_frames = 0;
-  bool from_source = false;  // the frame came from `source`, not `kept`
   // Keeps the frame when the check is likely to want it again.
   auto keep_if_doubtful = [&](ClipPassFrame* pf, const cv::Mat& frame) {
     const FrameEvidence& e = pf->evidence;
@@ -69,8 +68,7 @@ ClipPassResult RunClipPass(FrameSource* source,
                                          grid.direction(e.best_direction)) >
                              options.keep_off_deg);
     if (doubtful && kept_frames < options.keep_max_frames) {
-      // Frames the caller kept may be views of its own buffers: copied.
-      pf->gray = from_source ? frame : frame.clone();
+      frame.convertTo(pf->gray, CV_16F);  // a copy, at half the size
       ++kept_frames;
     }
   };
@@ -84,7 +82,6 @@ ClipPassResult RunClipPass(FrameSource* source,
     }
     ClipPassFrame& pf = out.frames[k];
     cv::Mat gray;
-    from_source = kept[k].empty();
     if (!kept[k].empty()) {
       gray = kept[k];
       pf.index = source_index[k];
