@@ -38,9 +38,7 @@ void BindWholeClip(py::module_& m) {
                              })
       .def_property_readonly("gray", [](const ClipPassFrame& f) -> py::object {
         if (f.gray.empty()) return py::none();
-        cv::Mat g;
-        f.gray.convertTo(g, CV_32F);
-        return MatAsArray(std::move(g));
+        return MatAsArray(f.gray);
       });
 
   m.def(

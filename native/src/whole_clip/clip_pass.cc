@@ -68,7 +68,7 @@ ClipPassResult RunClipPass(FrameSource* source,
                                          grid.direction(e.best_direction)) >
                              options.keep_off_deg);
     if (doubtful && kept_frames < options.keep_max_frames) {
-      frame.convertTo(pf->gray, CV_16F);  // a copy, at half the size
+      pf->gray = frame.clone();  // never a view of the caller's frames
       ++kept_frames;
     }
   };

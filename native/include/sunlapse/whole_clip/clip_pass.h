@@ -30,11 +30,12 @@ struct ClipPassOptions {
   // The progress callback is called every this many frames.
   int progress_every = 8;
   // Frames the check after the path is likely to read again are kept (at
-  // most keep_max_frames of them, as half floats: 1 MB at 960x540): those
-  // with usable evidence the tracker did not follow, or whose tracked Sun
-  // is further than keep_off_deg from the frame's own best direction.
-  // Reading a frame of a long-GOP movie again decodes from its key frame:
-  // at 4K, half a second a frame.
+  // most keep_max_frames of them, copies): those with usable evidence the
+  // tracker did not follow, or whose tracked Sun is further than
+  // keep_off_deg from the frame's own best direction. Reading a frame of a
+  // long-GOP movie again decodes from its key frame: at 4K, half a second a
+  // frame. Kept exact: as half floats, the refinement of the Marseille
+  // January clip's sunset frames came out degrees apart.
   double keep_off_deg = 3.0;
   int keep_max_frames = 32;
   void Check() const;
@@ -46,7 +47,7 @@ struct ClipPassFrame {
   FrameEvidence evidence;
   bool tracked = false;  // `track` holds the tracker's Sun on the frame
   TrackedFrame track;
-  cv::Mat gray;  // the frame as tracked, CV_16F, when kept (ClipPassOptions)
+  cv::Mat gray;  // the frame as tracked, when kept (ClipPassOptions)
 };
 
 struct ClipPassResult {
