@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -49,10 +48,7 @@ struct FrameStream::Impl {
       : options(o),
         indices(std::move(idx)),
         reader(path),
-        table(1, 256, CV_32F) {
-    for (int v = 0; v < 256; ++v)
-      table.at<float>(0, v) = static_cast<float>(std::pow(v / 255.0, o.gamma));
-  }
+        table(LinearGrayTable(o.gamma)) {}
 
   // Float frames whose consumers have let go are filled again: a fresh
   // 8 MB buffer per 1080p frame cost as much as the conversion itself (page

@@ -680,6 +680,13 @@ cv::Mat AreaReduced(const cv::Mat& image, cv::Size size) {
   return out;
 }
 
+cv::Mat LinearGrayTable(double gamma) {
+  cv::Mat table(1, 256, CV_32F);
+  for (int v = 0; v < 256; ++v)
+    table.at<float>(0, v) = static_cast<float>(std::pow(v / 255.0, gamma));
+  return table;
+}
+
 cv::Mat ToLinearGray(const cv::Mat& image, double gamma) {
   if (image.empty()) return {};
   cv::Mat gray;
@@ -692,12 +699,7 @@ cv::Mat ToLinearGray(const cv::Mat& image, double gamma) {
   }
   cv::Mat out;
   if (gray.depth() == CV_8U) {
-    // A table of the 256 values: the per-pixel pow() cost more than decoding
-    // a 1080p frame.
-    cv::Mat table(1, 256, CV_32F);
-    for (int v = 0; v < 256; ++v)
-      table.at<float>(0, v) = static_cast<float>(std::pow(v / 255.0, gamma));
-    cv::LUT(gray, table, out);
+    cv::LUT(gray, LinearGrayTable(gamma), out);
     return out;
   }
   const double scale = gray.depth() == CV_16U ? 1.0 / 65535.0 : 1.0;

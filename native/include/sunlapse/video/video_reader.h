@@ -124,4 +124,9 @@ cv::Mat AreaReduced(const cv::Mat& image, cv::Size size);
 // gamma undone (value^gamma; gamma 1 keeps the encoded values).
 cv::Mat ToLinearGray(const cv::Mat& image, double gamma = 2.2);
 
+// ToLinearGray's 8-bit value -> linear float table (1 x 256, CV_32F), for
+// cv::LUT: a table of the 256 values, as pow() per pixel cost more than
+// decoding a 1080p frame.
+cv::Mat LinearGrayTable(double gamma);
+
 }  // namespace sunlapse
