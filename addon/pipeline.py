@@ -123,11 +123,16 @@ class _FrameSource:
             raise
 
 
+def _check_clip_size(width, height, camera):
+    if (width, height) != (camera.width, camera.height):
+        raise PipelineError(f"clip frames are {width}x{height} but the camera expects "
+                            f"{camera.width}x{camera.height}: set the scene's resolution "
+                            "to the clip's")
+
+
 def _gray(bgr, camera, method):
     native = native_loader.require()
-    if bgr.shape[1] != camera.width or bgr.shape[0] != camera.height:
-        raise PipelineError(f"clip frames are {bgr.shape[1]}x{bgr.shape[0]} but the camera "
-                            f"expects {camera.width}x{camera.height}")
+    _check_clip_size(bgr.shape[1], bgr.shape[0], camera)
     return native.to_linear_gray(bgr, GAMMA[method])
 
 
@@ -526,8 +531,7 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None)
             if span[0] <= k <= span[-1] or zs[span[0]] is None or zs[span[-1]] is None:
                 continue
             end = span[0] if k < span[0] else span[-1]
-            moved = (abs(seconds[k] - seconds[end]) / 3600.0 * whole_clip.SUN_DEG_PER_HOUR
-                     if seconds is not None else abs(k - end) * whole_clip.UNTIMED_STEP_DEG)
+            moved = whole_clip.sun_motion_bound_deg(k, end, seconds)
             zs[k], azs[k] = _past_span(zs[end], azs[end], raws[k][1], raws[k][2], moved,
                                        None if circle is None else circle.get(end),
                                        None if circle is None else circle.get(k))
@@ -639,11 +643,7 @@ def _run_whole_clip(scene, camera, clip_path, source, frames, visit, times, opti
 
     # The frames stream reduced to the estimate's working size: a clip of
     # another size than the camera's would be reduced to it silently.
-    decoded = (source.reader.width, source.reader.height)
-    if decoded != (camera.width, camera.height):
-        raise PipelineError(f"clip frames are {decoded[0]}x{decoded[1]} but the camera "
-                            f"expects {camera.width}x{camera.height}: set the scene's "
-                            "resolution to the clip's")
+    _check_clip_size(source.reader.width, source.reader.height, camera)
 
     def open_stream(fs, near, size):
         # The reference frames also come in colour for the note, at its size.

@@ -139,6 +139,15 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
+def sun_motion_bound_deg(k: int, j: int, times_s: Optional[Sequence[float]]) -> float:
+    """How far the Sun can move between frames k and j (positions in the
+    run's frames; deg): from their capture times in seconds when known, else
+    a generous step per frame."""
+    if times_s is not None:
+        return abs(times_s[k] - times_s[j]) / 3600.0 * SUN_DEG_PER_HOUR
+    return abs(k - j) * UNTIMED_STEP_DEG
+
+
 def working_factor(width: int) -> int:
     """The power of two a frame `width` wide is divided by to be at most
     WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
@@ -407,10 +416,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     where = {"run": None, "last": None}  # the tracker's run and its last frame
 
     def motion_deg(k, j):
-        """How far the Sun can move between frames k and j (deg)."""
-        if times_s is not None:
-            return abs(times_s[k] - times_s[j]) / 3600.0 * SUN_DEG_PER_HOUR
-        return abs(k - j) * UNTIMED_STEP_DEG
+        return sun_motion_bound_deg(k, j, times_s)
 
     def restart(run, first):
         """A tracker for the frames read again: the pass's own, or, when it
