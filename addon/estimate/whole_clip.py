@@ -322,7 +322,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     def read_again(k):
         """Frame k at the working size: as the pass kept it, else read
         again."""
-        gray = held.pop(k, None)
+        # Frames the pass kept because the check was likely to want them.
+        gray = done.take_kept(k)
         if gray is not None:
             return gray
         reads["count"] += 1
@@ -331,8 +332,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     # The pass over the clip, in native code without Python's lock: evidence
     # for every frame, and the tracker following the shadows on the same
     # frames (checked against the path afterwards).
-    ok = native.FrameEvidenceStatus.OK
-    usable_status = (ok, native.FrameEvidenceStatus.NO_SHADOWS)
+    usable_status = (int(native.FrameEvidenceStatus.OK),
+                     int(native.FrameEvidenceStatus.NO_SHADOWS))
     directions = [tuple(d) for d in sky.directions.tolist()]
     tracker = native.ShadowTracker(scene, work, list(ground_object_ids), ignore_top_rows=top,
                                    subsamples=1 if factor > 1 else 0)
@@ -346,22 +347,18 @@ def estimate(native, scene, camera, frames: Sequence[int],
     pass_options = native.ClipPassOptions(steer_deg=REFINE_MAX_DEG)
     done = native.run_clip_pass(
         frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
-        [kept.get(f) for f in frames], starts, work, sky, tracker, work,
-        pass_options,
+        [kept.get(f) for f in frames], starts, work, sky, tracker, pass_options,
         lambda x: progress is None or progress(0.8 * x) is not False)
     del kept, frame_source
-    if done["cancelled"]:
+    if done.cancelled:
         raise Cancelled()
     reads["count"] += len(rest)
-    clock["tracking"] += done["tracking_seconds"]
-    clock["start"] = done["start_seconds"]
-    tracker_started = done["tracker_started"]
-    status = [p.evidence.status for p in done["frames"]]
-    reasons = [p.read_message or p.evidence.message or None for p in done["frames"]]
-    tracked: List[object] = [p.track for p in done["frames"]]
-    # Frames the pass kept because the check is likely to want them again.
-    held = {k: p.gray for k, p in enumerate(done["frames"]) if p.gray is not None}
-    del done
+    clock["tracking"] += done.tracking_seconds
+    clock["start"] = done.start_seconds
+    tracker_started = done.tracker_started
+    # Per frame, in native memory (done.reason(k), done.track(k)): Python
+    # objects for every frame would cost kilobytes a frame on long clips.
+    usable_frames = np.isin(done.status, usable_status)
     t_evidence = time.perf_counter() - t0
 
     path_options = native.SunPathOptions()
@@ -372,7 +369,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     path = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
                                  path_options)
     if not path["success"]:
-        result.frames = [RawFrame(f, reason=path["message"] or reasons[k] or "no evidence")
+        result.frames = [RawFrame(f, reason=path["message"] or done.reason(k) or "no evidence")
                          for k, f in enumerate(frames)]
         result.message = path["message"]
         return result
@@ -388,6 +385,10 @@ def estimate(native, scene, camera, frames: Sequence[int],
                                                              sky.spacing_deg))
     t_solved = time.perf_counter() - t0
     spacing = sky.spacing_deg
+    sky_sizes = {"samples": sky.num_samples, "band_entries": sky.band_entries}
+    # The sky's table and every frame's kept costs (3 kB a frame) are done
+    # with: the check needs the path only.
+    del sky
     bounds = [0]
     for k in range(1, n):
         if path["jump_before"][k]:
@@ -451,7 +452,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         tick(0.8 + 0.2 * clock["done"] / n)
         d = directions[path["direction"][anchor if beyond else k]]
         limit = REFINE_MAX_DEG + (motion_deg(k, anchor) if beyond else 0.0)
-        refined = tracked[k]
+        refined = done.track(k)
         if refined is not None and not measured[k] and not beyond:
             if _angle_deg(refined.sun_in_world, d) > limit and not between(
                     k, refined.sun_in_world):
@@ -498,10 +499,10 @@ def estimate(native, scene, camera, frames: Sequence[int],
         result.segments.append(frames[lo:hi])
         seg = [RawFrame(frames[k], segment=s, measured=bool(measured[k])) for k in range(lo, hi)]
         raws.extend(seg)
-        usable = [status[k] in usable_status for k in range(lo, hi)]
+        usable = usable_frames[lo:hi]
         for k in range(lo, hi):
             if not usable[k - lo]:
-                seg[k - lo].reason = reasons[k] or "no evidence on this frame"
+                seg[k - lo].reason = done.reason(k) or "no evidence on this frame"
             else:
                 seg[k - lo].reason = "no shadow evidence on this frame or around it in its segment"
         first = next((k for k in range(lo, hi) if measured[k]), None)
@@ -533,7 +534,6 @@ def estimate(native, scene, camera, frames: Sequence[int],
                      "path_again_s": t_solved - t_prior, "path_prior": prior is not None,
                      "check_s": t_checked - t_solved,
                      "frames_read": reads["count"], "frames": n,
-                     "total_s": t_end, "samples": sky.num_samples,
-                     "band_entries": sky.band_entries,
+                     "total_s": t_end, **sky_sizes,
                      "directions": len(directions), "spacing_deg": spacing}
     return result

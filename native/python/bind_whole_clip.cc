@@ -27,27 +27,69 @@ void BindWholeClip(py::module_& m) {
       .field("keep_max_frames", &ClipPassOptions::keep_max_frames,
              "keep at most this many frames for the check");
 
-  py::class_<ClipPassFrame>(m, "ClipPassFrame", "One frame of a clip pass.")
-      .def_readonly("index", &ClipPassFrame::index)
-      .def_readonly("read_message", &ClipPassFrame::read_message)
-      .def_readonly("evidence", &ClipPassFrame::evidence)
-      .def_property_readonly("track",
-                             [](const ClipPassFrame& f) -> py::object {
-                               return f.tracked ? py::cast(f.track)
-                                                : py::none();
+  // The pass's frames stay in native memory, asked for one at a time: a
+  // Python object per frame and field costs kilobytes a frame on long
+  // clips (issue 18: memory flat in the clip's length).
+  py::class_<ClipPassResult>(m, "ClipPassResult",
+                             "The frames of a clip pass (clip_pass.h).")
+      .def_property_readonly("cancelled",
+                             [](const ClipPassResult& r) {
+                               return r.status ==
+                                      ClipPassResult::Status::kCancelled;
                              })
-      .def_property_readonly("gray", [](const ClipPassFrame& f) -> py::object {
-        if (f.gray.empty()) return py::none();
-        return MatAsArray(f.gray);
-      });
+      .def_readonly("tracker_started", &ClipPassResult::tracker_started)
+      .def_readonly("tracking_seconds", &ClipPassResult::tracking_seconds)
+      .def_readonly("start_seconds", &ClipPassResult::start_seconds)
+      .def_readonly("seconds", &ClipPassResult::seconds)
+      .def("__len__", [](const ClipPassResult& r) { return r.frames.size(); })
+      .def_property_readonly(
+          "status",
+          [](const ClipPassResult& r) {
+            py::array_t<int8_t> out(static_cast<py::ssize_t>(r.frames.size()));
+            auto v = out.mutable_unchecked<1>();
+            for (size_t k = 0; k < r.frames.size(); ++k)
+              v(k) = static_cast<int8_t>(r.frames[k].evidence.status);
+            return out;
+          },
+          "int8 per frame: its FrameEvidenceStatus value")
+      .def(
+          "reason",
+          [](const ClipPassResult& r, size_t k) -> py::object {
+            const ClipPassFrame& f = r.frames.at(k);
+            const std::string& why =
+                f.read_message.empty() ? f.evidence.message : f.read_message;
+            if (why.empty()) return py::none();
+            return py::str(why);
+          },
+          py::arg("k"), "why frame k has no evidence (None: no reason given)")
+      .def(
+          "track",
+          [](const ClipPassResult& r, size_t k) -> py::object {
+            const ClipPassFrame& f = r.frames.at(k);
+            return f.tracked ? py::cast(f.track) : py::none();
+          },
+          py::arg("k"), "the tracker's Sun on frame k (TrackedFrame) or None")
+      .def(
+          "take_kept",
+          [](ClipPassResult& r, size_t k) -> py::object {
+            ClipPassFrame& f = r.frames.at(k);
+            cv::Mat gray = f.Kept();
+            f.kept_luma.release();
+            f.kept_table.release();
+            f.kept_gray.release();
+            if (gray.empty()) return py::none();
+            return MatAsArray(std::move(gray));
+          },
+          py::arg("k"),
+          "frame k as the pass kept it (float32 linear gray), handed over "
+          "(a second call gives None), or None when it was not kept");
 
   m.def(
       "run_clip_pass",
       [](FrameSource& source, const std::vector<int>& source_index,
          const py::list& kept, const std::vector<uint8_t>& segment_start,
          const Camera& camera, SkyEvidence& sky, ShadowTracker& tracker,
-         const Camera& tracker_camera, const ClipPassOptions& options,
-         const py::object& progress) {
+         const ClipPassOptions& options, const py::object& progress) {
         std::vector<cv::Mat> mats;
         for (const py::handle& f : kept)
           mats.push_back(GrayArg(py::reinterpret_borrow<py::object>(f)));
@@ -56,26 +98,19 @@ void BindWholeClip(py::module_& m) {
         {
           py::gil_scoped_release release;
           r = RunClipPass(&source, source_index, mats, segment_start, camera,
-                          &sky, &tracker, tracker_camera, options, cb);
+                          &sky, &tracker, options, cb);
         }
-        py::dict out;
-        out["cancelled"] = r.status == ClipPassResult::Status::kCancelled;
-        out["frames"] = py::cast(std::move(r.frames));
-        out["tracker_started"] = r.tracker_started;
-        out["tracking_seconds"] = r.tracking_seconds;
-        out["start_seconds"] = r.start_seconds;
-        out["seconds"] = r.seconds;
-        return out;
+        return r;
       },
       py::arg("source"), py::arg("source_index"), py::arg("kept"),
       py::arg("segment_start"), py::arg("camera"), py::arg("sky"),
-      py::arg("tracker"), py::arg("tracker_camera"),
-      py::arg("options") = ClipPassOptions(), py::arg("progress") = py::none(),
+      py::arg("tracker"), py::arg("options") = ClipPassOptions(),
+      py::arg("progress") = py::none(),
       "The pass over a clip without Python's lock: each frame scored against "
-      "the sky and followed by the tracker (clip_pass.h). kept[k]: frame k "
-      "already read (float32 gray) or None to take the source's next, whose "
-      "index must be source_index[k]. progress(fraction) returning False "
-      "cancels.");
+      "the sky and followed by the tracker (clip_pass.h); a ClipPassResult. "
+      "kept[k]: frame k already read (float32 gray) or None to take the "
+      "source's next, whose index must be source_index[k]. "
+      "progress(fraction) returning False cancels.");
 
   m.def(
       "resized_gray",

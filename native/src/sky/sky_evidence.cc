@@ -349,6 +349,13 @@ int64_t SkyEvidence::band_entries() const {
 }
 bool SkyEvidence::has_reference() const { return !impl_->reference.empty(); }
 int SkyEvidence::num_frames() const { return impl_->frames; }
+void SkyEvidence::ReserveFrames(int more) {
+  Impl& m = *impl_;
+  const size_t frames = static_cast<size_t>(m.frames) + std::max(0, more);
+  m.scores.reserve(frames * m.grid.size());
+  m.best.reserve(frames);
+  m.significance.reserve(frames);
+}
 const std::vector<uint8_t>& SkyEvidence::scores() const {
   return impl_->scores;
 }

@@ -109,6 +109,8 @@ struct FrameStream::Impl {
     f.status = StreamedFrame::Status::kOk;
     f.gray = Recycled(gray8.rows, gray8.cols);
     cv::LUT(gray8, table, f.gray);
+    f.luma = std::move(gray8);
+    f.table = table;
     if (options.keep_bgr) f.bgr = std::move(bgr);
     return f;
   }

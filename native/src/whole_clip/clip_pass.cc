@@ -39,12 +39,19 @@ bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
   return true;
 }
 
+cv::Mat ClipPassFrame::Kept() const {
+  if (kept_luma.empty()) return kept_gray;
+  cv::Mat gray;
+  cv::LUT(kept_luma, kept_table, gray);
+  return gray;
+}
+
 ClipPassResult RunClipPass(FrameSource* source,
                            const std::vector<int>& source_index,
                            const std::vector<cv::Mat>& kept,
                            const std::vector<uint8_t>& segment_start,
                            const Camera& camera, SkyEvidence* sky,
-                           ShadowTracker* tracker, const Camera& tracker_camera,
+                           ShadowTracker* tracker,
                            const ClipPassOptions& options,
                            const std::function<bool(double)>& progress) {
   options.Check();
@@ -56,10 +63,13 @@ ClipPassResult RunClipPass(FrameSource* source,
   const auto t0 = std::chrono::steady_clock::now();
   ClipPassResult out;
   out.frames.resize(n);
+  sky->ReserveFrames(static_cast<int>(n));
   const SkyGrid& grid = sky->grid();
   bool following = false;
   int kept_frames = 0;
-  // Keeps the frame when the check is likely to want it again.
+  // Keeps the frame when the check is likely to want it again: its 8-bit
+  // luma when the source gave it (exact, a quarter of the float frame).
+  cv::Mat luma, table;
   auto keep_if_doubtful = [&](ClipPassFrame* pf, const cv::Mat& frame) {
     const FrameEvidence& e = pf->evidence;
     const bool doubtful =
@@ -68,7 +78,12 @@ ClipPassResult RunClipPass(FrameSource* source,
                                          grid.direction(e.best_direction)) >
                              options.keep_off_deg);
     if (doubtful && kept_frames < options.keep_max_frames) {
-      pf->gray = frame.clone();  // never a view of the caller's frames
+      if (!luma.empty()) {
+        pf->kept_luma = luma;  // the source's own, handed over
+        pf->kept_table = table;
+      } else {
+        pf->kept_gray = frame.clone();  // never a view of the caller's frames
+      }
       ++kept_frames;
     }
   };
@@ -82,6 +97,8 @@ ClipPassResult RunClipPass(FrameSource* source,
     }
     ClipPassFrame& pf = out.frames[k];
     cv::Mat gray;
+    luma.release();
+    table.release();
     if (!kept[k].empty()) {
       gray = kept[k];
       pf.index = source_index[k];
@@ -103,6 +120,8 @@ ClipPassResult RunClipPass(FrameSource* source,
                           ": not the scene's footage";
       } else {
         gray = std::move(f.gray);
+        luma = std::move(f.luma);
+        table = std::move(f.table);
       }
     }
     pf.evidence = sky->AddFrame(gray);
@@ -111,8 +130,6 @@ ClipPassResult RunClipPass(FrameSource* source,
     if (gray.empty() || (e.status != FrameEvidence::Status::kOk &&
                          e.status != FrameEvidence::Status::kNoShadows))
       continue;
-    gray = AreaReduced(
-        gray, cv::Size(tracker_camera.width(), tracker_camera.height()));
     const bool sure = e.status == FrameEvidence::Status::kOk &&
                       e.best_direction >= 0 && e.margin >= options.start_margin;
     if (!following) {

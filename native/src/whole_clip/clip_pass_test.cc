@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sunlapse/common/angles.h"
+#include "sunlapse/video/video_reader.h"
 #include "synthetic.h"
 
 namespace sunlapse {
@@ -34,13 +35,23 @@ struct Fixture {
     sky.SetReference({frames[0], frames[5], frames[10], frames[15]});
   }
   // The frames as a source; frame `broken` undecodable, `small` too small.
-  FrameList Source(int broken, int small) const {
+  // with_luma: as a movie's stream gives them, 8-bit luma and its table
+  // beside the linear gray made from them.
+  FrameList Source(int broken, int small, bool with_luma = false) const {
     std::vector<StreamedFrame> list;
+    const cv::Mat table = LinearGrayTable(2.2);
     for (int f = 0; f < n; ++f) {
       StreamedFrame s;
       s.index = f;
       s.status = StreamedFrame::Status::kOk;
       s.gray = frames[f];
+      if (with_luma) {
+        cv::Mat encoded;
+        cv::pow(frames[f], 1.0 / 2.2, encoded);
+        encoded.convertTo(s.luma, CV_8U, 255.0);
+        s.table = table;
+        cv::LUT(s.luma, table, s.gray);
+      }
       if (f == broken) {
         s.status = StreamedFrame::Status::kUnusable;
         s.gray = cv::Mat();
@@ -70,7 +81,7 @@ TEST(ClipPass, ScoresEveryFrameAndFollowsTheSunThroughBrokenFrames) {
   FrameList source(std::move(rest));
   const ClipPassResult r =
       RunClipPass(&source, fx.Indices(), kept, {}, fx.cam, &fx.sky, &fx.tracker,
-                  fx.cam, ClipPassOptions(), nullptr);
+                  ClipPassOptions(), nullptr);
   ASSERT_EQ(r.status, ClipPassResult::Status::kSuccess);
   ASSERT_EQ(r.frames.size(), static_cast<size_t>(fx.n));
   EXPECT_TRUE(r.tracker_started);
@@ -94,74 +105,57 @@ TEST(ClipPass, ScoresEveryFrameAndFollowsTheSunThroughBrokenFrames) {
   EXPECT_EQ(fx.sky.num_frames(), fx.n);
 }
 
-// Large frames are tracked on the frame resized to the tracker's camera.
-TEST(ClipPass, TracksOnFramesResizedToTheTrackersCamera) {
-  Fixture fx;
-  const Camera half = fx.cam.Resized(160, 120);
-  ShadowTracker small(fx.scene, half, [] {
-    ShadowTrackerOptions o;
-    o.ground_object_ids = {0};
-    return o;
-  }());
-  FrameList source = fx.Source(-1, -1);
-  const ClipPassResult r =
-      RunClipPass(&source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam,
-                  &fx.sky, &small, half, ClipPassOptions(), nullptr);
-  int tracked = 0;
-  for (int f = 0; f < fx.n; ++f) {
-    if (!r.frames[f].tracked) continue;
-    ++tracked;
-    EXPECT_LT(AngleBetweenDeg(r.frames[f].track.sun_in_world, PathAt(f, fx.n)),
-              2.0)
-        << "frame " << f;
-  }
-  EXPECT_GE(tracked, fx.n - 2);
-}
-
-// Frames the check may want again are kept, up to a number, as copies
-// (never views of the caller's frames).
+// Frames the check may want again are kept, up to a number: a frame the
+// caller gave as a copy (never a view of it), a frame the source gave with
+// its 8-bit luma as that luma, which gives back exactly the frame tracked.
 TEST(ClipPass, KeepsFramesTrackedAwayFromTheirEvidenceUpToANumber) {
   Fixture fx;
   std::vector<cv::Mat> kept(fx.n);
   kept[0] = fx.frames[0];
-  std::vector<StreamedFrame> rest;
-  FrameList all = fx.Source(-1, -1);
-  for (StreamedFrame s; all.Next(&s);)
+  std::vector<StreamedFrame> rest, given(fx.n);
+  FrameList all = fx.Source(-1, -1, /*with_luma=*/true);
+  for (StreamedFrame s; all.Next(&s);) {
+    given[s.index] = s;
     if (s.index != 0) rest.push_back(s);
+  }
   FrameList source(std::move(rest));
   ClipPassOptions o;
   o.keep_off_deg = 0.0;  // every frame is "away" from its evidence
   o.keep_max_frames = 3;
-  const ClipPassResult r =
-      RunClipPass(&source, fx.Indices(), kept, {}, fx.cam, &fx.sky, &fx.tracker,
-                  fx.cam, o, nullptr);
+  const ClipPassResult r = RunClipPass(&source, fx.Indices(), kept, {}, fx.cam,
+                                       &fx.sky, &fx.tracker, o, nullptr);
   for (int f = 0; f < fx.n; ++f) {
-    const cv::Mat& g = r.frames[f].gray;
+    const ClipPassFrame& pf = r.frames[f];
+    const cv::Mat g = pf.Kept();
     EXPECT_EQ(g.empty(), f >= 3) << f;
     if (g.empty()) continue;
+    EXPECT_EQ(g.type(), CV_32F);
     EXPECT_EQ(g.size(), cv::Size(fx.cam.width(), fx.cam.height()));
-    EXPECT_EQ(cv::norm(g, fx.frames[f], cv::NORM_INF), 0.0) << f;
+    const cv::Mat& tracked = f == 0 ? fx.frames[0] : given[f].gray;
+    EXPECT_EQ(cv::norm(g, tracked, cv::NORM_INF), 0.0) << f;
+    // From the source: the luma (a byte a pixel), not a float copy.
+    EXPECT_EQ(pf.kept_gray.empty(), f > 0) << f;
+    EXPECT_EQ(pf.kept_luma.empty(), f == 0) << f;
   }
-  EXPECT_NE(r.frames[0].gray.data, fx.frames[0].data);
+  EXPECT_NE(r.frames[0].kept_gray.data, fx.frames[0].data);
 
   Fixture again;
   FrameList clean = again.Source(-1, -1);
   o.keep_off_deg = 180.0;  // only frames the tracker did not follow
   const ClipPassResult none =
       RunClipPass(&clean, again.Indices(), std::vector<cv::Mat>(again.n), {},
-                  again.cam, &again.sky, &again.tracker, again.cam, o, nullptr);
+                  again.cam, &again.sky, &again.tracker, o, nullptr);
   for (int f = 0; f < again.n; ++f)
-    EXPECT_EQ(none.frames[f].gray.empty(), none.frames[f].tracked) << f;
+    EXPECT_EQ(none.frames[f].Kept().empty(), none.frames[f].tracked) << f;
 }
 
 TEST(ClipPass, StopsWhenAskedAndRefusesAMismatchedSource) {
   Fixture fx;
   FrameList source = fx.Source(-1, -1);
   int calls = 0;
-  const ClipPassResult r =
-      RunClipPass(&source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam,
-                  &fx.sky, &fx.tracker, fx.cam, ClipPassOptions(),
-                  [&](double) { return ++calls < 2; });
+  const ClipPassResult r = RunClipPass(
+      &source, fx.Indices(), std::vector<cv::Mat>(fx.n), {}, fx.cam, &fx.sky,
+      &fx.tracker, ClipPassOptions(), [&](double) { return ++calls < 2; });
   EXPECT_EQ(r.status, ClipPassResult::Status::kCancelled);
   EXPECT_LT(r.frames.size(), static_cast<size_t>(fx.n));
   FrameList other = fx.Source(-1, -1);
@@ -169,7 +163,7 @@ TEST(ClipPass, StopsWhenAskedAndRefusesAMismatchedSource) {
   shifted[0] = 5;
   EXPECT_THROW(
       RunClipPass(&other, shifted, std::vector<cv::Mat>(fx.n), {}, fx.cam,
-                  &fx.sky, &fx.tracker, fx.cam, ClipPassOptions(), nullptr),
+                  &fx.sky, &fx.tracker, ClipPassOptions(), nullptr),
       std::runtime_error);
 }
 

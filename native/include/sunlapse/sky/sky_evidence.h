@@ -165,6 +165,10 @@ class SkyEvidence {
   FrameEvidence AddFrame(const cv::Mat& frame,
                          std::vector<float>* explained_out = nullptr);
   int num_frames() const;
+  // Room for `more` frames' costs, allocated once rather than grown by
+  // doubling (each doubling copies every cost so far: 30 MB at 10,000
+  // frames).
+  void ReserveFrames(int more);
   // Cost of each direction on frame k (log-likelihood below the frame's best
   // direction; 0 everywhere on a frame without evidence), as kept: quantised
   // to 0.1 and clipped at 25.5 (a frame never weighs more than that).

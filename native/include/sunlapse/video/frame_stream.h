@@ -51,7 +51,11 @@ struct StreamedFrame {
   FrameReport report;   // the reader's own report of the frame
   std::string message;  // why not, for kUnusable and kPastEnd
   cv::Mat gray;         // CV_32F linear gray (options' size), kOk only
-  cv::Mat bgr;          // CV_8UC3 (options' bgr size), kOk with keep_bgr only
+  // The 8-bit luma gray was made from, gray = LUT(luma, table) (FrameStream
+  // only; other sources leave them empty): a quarter of gray's memory for a
+  // frame to be kept, and exact.
+  cv::Mat luma, table;
+  cv::Mat bgr;  // CV_8UC3 (options' bgr size), kOk with keep_bgr only
 };
 
 // Where a pass over a clip takes its frames from, one after another.

@@ -47,7 +47,12 @@ struct ClipPassFrame {
   FrameEvidence evidence;
   bool tracked = false;  // `track` holds the tracker's Sun on the frame
   TrackedFrame track;
-  cv::Mat gray;  // the frame as tracked, when kept (ClipPassOptions)
+  // The frame as tracked, when kept (ClipPassOptions): the source's 8-bit
+  // luma and its table to linear gray when it gave them (StreamedFrame),
+  // else the float frame.
+  cv::Mat kept_luma, kept_table, kept_gray;
+  // The kept frame as CV_32F linear gray; empty when not kept.
+  cv::Mat Kept() const;
 };
 
 struct ClipPassResult {
@@ -78,15 +83,14 @@ bool StartTracker(ShadowTracker* tracker, const cv::Mat& frame,
 // index source_index[k]. segment_start[k] = 1 where the clip is known to
 // jump (capture times going back): the tracker starts again after it.
 // progress(fraction) returning false cancels. The camera gives the size
-// every frame must have; the tracker may work on the frames resized to
-// tracker_camera's size (area average), as large frames need no more pixels
-// for it.
+// every frame must have (the sky's and the tracker's: a large clip's frames
+// come reduced by the source, FrameStreamOptions::width).
 ClipPassResult RunClipPass(FrameSource* source,
                            const std::vector<int>& source_index,
                            const std::vector<cv::Mat>& kept,
                            const std::vector<uint8_t>& segment_start,
                            const Camera& camera, SkyEvidence* sky,
-                           ShadowTracker* tracker, const Camera& tracker_camera,
+                           ShadowTracker* tracker,
                            const ClipPassOptions& options,
                            const std::function<bool(double)>& progress);
 
