@@ -3,7 +3,8 @@
 
   python3 bench/whole_run.py [--sizes 720,1080,2160] [--length 300] [--gop 25]
                              [--long 1000,10000] [--scene DIR] [--cache DIR]
-                             [--blender PATH] [--suite-cache DIR] [--out FIGURES.json]
+                             [--blender PATH] [--suite-cache DIR]
+                             [--suite-size 1080] [--suite-length 300] [--out FIGURES.json]
 
 Clips: the plaza preset's rendered frames (640x360, 90 frames; DIR/frames/ or
 DIR/clip.mp4 of --scene, by default build/accuracy/scenes/plaza-bench/, else
@@ -29,7 +30,9 @@ For each size in --sizes (--length frames each) and each 1080p length in
                frame" of the targets), and the command's peak memory (max RSS);
 then memory of the longest vs the shortest --long clip, optionally the worst
 scene of the randomised suite (--suite-cache: bench/suite.py's cache, each
-scene's estimate run once), and a summary against issue 18's targets.
+scene's estimate run once; on its own 320x180 clip, or with --suite-size on
+its frames played forward and back to --suite-length at that size, as the
+plaza's are), and a summary against issue 18's targets.
 
 Figures only: the exit code is 0 whatever they are (non-zero only for bad
 flags or a missing native build). Not part of tools/test.sh.
@@ -189,8 +192,18 @@ def parse_args(argv):
     p.add_argument("--blender", default="blender", help="the Blender command (default blender)")
     p.add_argument("--suite-cache", type=existing_dir,
                    help="bench/suite.py's cache: also measure every suite scene (slow)")
+    p.add_argument("--suite-size", type=int, default=0,
+                   help="measure the suite scenes upscaled to this clip height (one of "
+                        f"{','.join(str(h) for h in SIZES)}); default 0: their own clips")
+    p.add_argument("--suite-length", type=parse_length, default=300,
+                   help="frames of each --suite-size clip (default 300)")
     p.add_argument("--out", help="write every figure to this JSON file too")
     args = p.parse_args(argv)
+    if args.suite_size and args.suite_size not in SIZES:
+        p.error(f"--suite-size: {args.suite_size} is not one of "
+                f"{', '.join(str(h) for h in SIZES)} (or 0)")
+    if args.suite_size and not args.suite_cache:
+        p.error("--suite-size needs --suite-cache DIR")
     if shutil.which(args.blender) is None:
         p.error(f"--blender: '{args.blender}' is not a command found on PATH")
     if args.scene and not os.path.exists(os.path.join(args.scene, "scene.blend")):
@@ -301,11 +314,12 @@ def source_frames(scene_dir, cache):
     return listed(folder)
 
 
-def make_clip(frames, length, size, cache, gop=GOP):
+def make_clip(frames, length, size, cache, gop=GOP, tag=""):
     """`length` frames ping-ponged over `frames`, scaled to `size`, as H.264
-    with a key frame every `gop` frames."""
+    with a key frame every `gop` frames (`tag`: a prefix naming the scene
+    when it is not the plaza)."""
     w, h = size
-    path = os.path.join(cache, f"clip-{w}x{h}-{length}-g{gop}.mp4")
+    path = os.path.join(cache, f"clip-{tag}{w}x{h}-{length}-g{gop}.mp4")
     encoder = ENCODER + ["-g", str(gop)]
     key = {"version": CACHE_VERSION, "first": stamp(frames[0]), "last": stamp(frames[-1]),
            "count": len(frames), "length": length, "size": [w, h], "fps": FPS,
@@ -321,7 +335,7 @@ def make_clip(frames, length, size, cache, gop=GOP):
         for i, k in enumerate(pingpong(len(frames), length)):
             os.symlink(frames[k], os.path.join(links, f"{i + 1:06d}.png"))
         partial = path + ".partial.mp4"
-        log = os.path.join(cache, "logs", f"encode-{w}x{h}-{length}.log")
+        log = os.path.join(cache, "logs", f"encode-{tag}{w}x{h}-{length}.log")
         rc = run_logged(["ffmpeg", "-nostdin", "-y", "-loglevel", "error",
                          "-framerate", str(FPS), "-start_number", "1",
                          "-i", os.path.join(links, "%06d.png"),
@@ -533,7 +547,9 @@ def summary_lines(fig):
     suite = fig.get("suite")
     if suite and suite.get("worst_ratio"):
         w = suite["worst_ratio"]
-        rows.append((f"worst suite scene >= {TARGET_SUITE_RATIO}x decode-only",
+        on = (f", {suite['size'][0]}x{suite['size'][1]}, {suite['length']} frames"
+              if suite.get("size") else ", its own clip")
+        rows.append((f"worst suite scene >= {TARGET_SUITE_RATIO}x decode-only{on}",
                      f"{w['ratio']:.2f}x (scene {w['key']}; loop alone "
                      f"{fmt(w.get('ratio_steady'))}x)", verdict(w["ratio"] >= TARGET_SUITE_RATIO)))
     else:
@@ -588,17 +604,26 @@ def measure_suite(native, args, cache, failures):
                    if os.path.exists(os.path.join(args.suite_cache, k, "scene.blend"))
                    and os.path.exists(os.path.join(args.suite_cache, k, "clip.mp4"))),
                   key=lambda k: (not k.isdigit(), int(k) if k.isdigit() else 0, k))
+    size = SIZES.get(args.suite_size)
+    on = (f"on {size[0]}x{size[1]} clips of {args.suite_length} frames (their frames "
+          "played forward and back, upscaled)") if size else "on their own clips"
     print(f"\n== randomised suite: {len(keys)} scenes in {args.suite_cache}, "
-          "each estimated once", flush=True)
+          f"each estimated once {on}", flush=True)
     print(f"  {'scene':>12} {'frames':>6} {'decode f/s':>10} {'total_s':>8} {'est f/s':>8} "
           f"{'ratio':>6} {'loop alone':>10} {'max RSS MB':>10}")
     scenes = {}
     for key in keys:
         folder = os.path.join(args.suite_cache, key)
         try:
-            decode = measure_decode(native, os.path.join(folder, "clip.mp4"))
-            est = measure_estimate(args.blender, os.path.join(folder, "scene.blend"),
-                                   f"suite-{key}", cache)
+            clip, blend, name = (os.path.join(folder, "clip.mp4"),
+                                 os.path.join(folder, "scene.blend"), f"suite-{key}")
+            if size:
+                clip = make_clip(source_frames(folder, cache), args.suite_length, size, cache,
+                                 args.gop, tag=f"suite{key}-")
+                blend, _ = make_blend(args.blender, blend, clip, size, cache)
+                name = f"suite-{key}-{size[0]}x{size[1]}-{args.suite_length}"
+            decode = measure_decode(native, clip)
+            est = measure_estimate(args.blender, blend, name, cache)
         except BenchError as e:
             print(f"  {key:>12} {e}", flush=True)
             failures.append(f"suite scene {key}: {e}")
@@ -609,7 +634,8 @@ def measure_suite(native, args, cache, failures):
         print(f"  {key:>12} {f['frames']:>6} {ref['fps']:>10.1f} {fmt(f.get('total_s')):>8} "
               f"{fmt(f.get('fps'), '.1f'):>8} {fmt(f.get('ratio')):>6} "
               f"{fmt(f.get('ratio_steady')):>10} {f['max_rss_mb']:>10.0f}", flush=True)
-    out = {"scenes": scenes}
+    out = {"scenes": scenes, "size": list(size) if size else None,
+           "length": args.suite_length if size else None}
     timed = {k: f for k, f in scenes.items() if f.get("ratio") is not None}
     if timed:
         slow = max(timed, key=lambda k: timed[k]["total_s"])
