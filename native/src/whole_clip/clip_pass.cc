@@ -5,7 +5,6 @@
 #include <utility>
 
 #include "sunlapse/common/angles.h"
-#include "sunlapse/video/video_reader.h"
 
 namespace sunlapse {
 
