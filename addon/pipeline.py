@@ -446,7 +446,8 @@ def _finish(native, track, raws, options, times, progress, segments, pixel_scale
     of the run's frames in frame order, or None; pixel_scale: camera pixels
     per pixel of the native results (a tracker on reduced frames); circle:
     {index into raws: (zenith, geographic azimuth) of its segment's Sun
-    circle} where one was fitted (_doubt_off_circle)."""
+    circle} where one was fitted (_doubt_off_circle): the two-pass fit's
+    prior path and the path past a segment's confident span."""
     _check_progress(progress, 0.97)
     numbers = [r[0] for r in raws]
     north = track.north_offset_deg
@@ -517,8 +518,13 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None)
         ks = [k for k in ks if span[0] <= k <= span[-1]]
         x = [numbers[k] for k in ks] if seconds is None else [seconds[k] for k in ks]
         if mode == "two_pass" and options.method == "default":
+            # The segment's Sun circle, where one was fitted, lends the fit
+            # its shape where confident frames are far (two_pass_local_directions).
+            along = [None if circle is None else circle.get(k) for k in ks]
             z_s, a_s = smoothing.two_pass_local_directions(
-                x, [raws[k][1] for k in ks], [raws[k][2] for k in ks], [raws[k][3] for k in ks])
+                x, [raws[k][1] for k in ks], [raws[k][2] for k in ks], [raws[k][3] for k in ks],
+                prior_zenith=[None if c is None else c[0] for c in along],
+                prior_azimuth=[None if c is None else c[1] for c in along])
         else:
             z_s, a_s = smoothing.smooth_angles(
                 [numbers[k] for k in ks], [raws[k][1] for k in ks], [raws[k][2] for k in ks],

@@ -237,8 +237,17 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
     return z_out, a_out
 
 
+# Where a frame's neighbours carry little confidence, its window widens (by
+# WINDOW_GROWTH steps, up to MAX_HALF_WINDOW_FRAMES) until their mean
+# confidence, weighted by the kernel as the fit weighs them, is at least
+# this share of the segment's median (two_pass_local_directions, with a
+# prior path only).
+WINDOW_CONFIDENCE = 0.75
+WINDOW_GROWTH = 1.25
+
+
 def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window=None,
-                              iterations=4):
+                              iterations=4, prior_zenith=None, prior_azimuth=None):
     """Two-pass smoothing of the Sun's direction by local quadratics: at
     every frame, the unit vector's components are fitted over its neighbours
     in time (tricube kernel, the weights, robust bisquare weights on the
@@ -251,7 +260,19 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
     measurements' noise where they are good; a local fit follows any smooth
     path and still averages the noise and rejects outliers. `half_window`
     (in the frames' units) defaults to enough of the clip for six measured
-    frames on either side, at least an eighth of the span."""
+    frames on either side, at least an eighth of the span.
+
+    `prior_zenith`/`prior_azimuth` (one per frame, e.g. the segment's Sun
+    circle) give a path whose shape the fit borrows: the local fits run on
+    the raw Suns' offsets from it, and where the frames around carry little
+    confidence the window widens (WINDOW_CONFIDENCE) so that confident
+    frames further away carry the fit. Without a prior the window stays
+    fixed: a widened window at a segment's end is one-sided, and the line
+    fitted there through a curving path ran 11 deg off (Marseille March,
+    azimuth at sunset); offsets from the circle stay nearly constant, so
+    the wider fit no longer extrapolates the path's curve. A run of doubted
+    frames (suite scene 23: five at confidence 0.07-0.18, 5-7 deg off)
+    otherwise steers a fixed window's fit of its own."""
     t, z, w = _arrays(frames, zenith, weights)
     _, a, w_a = _arrays(frames, azimuth, weights)
     w = np.where(w_a > 0, w, 0.0)
@@ -261,30 +282,52 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
         return [None] * n, [None] * n
     raw = np.zeros((n, 3))
     raw[good] = _unit_vectors(z[good], a[good])
+    base = np.zeros((n, 3))  # the prior's Suns: the fits run on raw - base
+    adaptive = False
+    if prior_zenith is not None and prior_azimuth is not None:
+        _, pz, pw = _arrays(frames, prior_zenith, None)
+        _, pa, pw_a = _arrays(frames, prior_azimuth, None)
+        if np.all(pw > 0) and np.all(pw_a > 0):  # a prior only where it covers every frame
+            base = _unit_vectors(pz, pa)
+            adaptive = half_window is None
     span = float(np.ptp(t[good]))
+    step = span / max(1, int(good.sum()) - 1)
+    widest = MAX_HALF_WINDOW_FRAMES * step
     if half_window is None:
-        step = span / max(1, int(good.sum()) - 1)
         # On long clips an eighth of the span holds thousands of frames: at
         # most MAX_HALF_WINDOW_FRAMES on a side average the noise as well.
-        half_window = min(max(span / 8.0, 6.5 * step), MAX_HALF_WINDOW_FRAMES * step)
+        half_window = min(max(span / 8.0, 6.5 * step), widest)
     half_window = max(float(half_window), 1e-9)
-    robust = np.ones(n)
-    fitted = np.zeros((n, 3))
-    # Each frame's neighbours within the window, by sorted time (only they
+    # Each frame's neighbours within its window, by sorted time (only they
     # have kernel weight; the fits cost the window, not the clip).
     order = np.argsort(t, kind="stable")
     ts = t[order]
-    lo = np.searchsorted(ts, t - half_window, side="right")
-    hi = np.searchsorted(ts, t + half_window, side="left")
+    windows = np.full(n, half_window)
+    if adaptive:
+        need = WINDOW_CONFIDENCE * float(np.median(w[good]))
+        for i in range(n):
+            h = half_window
+            while h < widest:
+                near = order[np.searchsorted(ts, t[i] - h, side="right"):
+                             np.searchsorted(ts, t[i] + h, side="left")]
+                kern = (1.0 - np.abs((t[near] - t[i]) / h) ** 3) ** 3
+                if float(kern @ w[near]) >= need * float(kern.sum()):
+                    break
+                h = min(widest, WINDOW_GROWTH * h)
+            windows[i] = h
+    robust = np.ones(n)
+    fitted = np.zeros((n, 3))
+    lo = np.searchsorted(ts, t - windows, side="right")
+    hi = np.searchsorted(ts, t + windows, side="left")
     for _ in range(iterations):
         for i in range(n):
             near = order[lo[i]:hi[i]]
-            d = (t[near] - t[i]) / half_window
+            d = (t[near] - t[i]) / windows[i]
             kern = (1.0 - np.abs(d) ** 3) ** 3 * w[near] * robust[near]
             sel = kern > 0
             if not sel.any():  # no measured neighbour: the nearest measured frame
                 j = int(np.flatnonzero(good)[np.argmin(np.abs(t[good] - t[i]))])
-                fitted[i] = raw[j]
+                fitted[i] = raw[j] - base[j] + base[i]
                 continue
             m = int(sel.sum())
             distinct = len(np.unique(d[sel]))
@@ -295,8 +338,9 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
             degree = min(2 if (m >= 6 and sides >= 3) else (1 if m >= 3 else 0), distinct - 1)
             x = np.vander(d[sel], degree + 1, increasing=True)
             sw = np.sqrt(kern[sel])[:, None]
-            coef = np.linalg.lstsq(x * sw, raw[near][sel] * sw, rcond=None)[0]
-            fitted[i] = coef[0]  # the value at d = 0
+            coef = np.linalg.lstsq(x * sw, (raw[near][sel] - base[near][sel]) * sw,
+                                   rcond=None)[0]
+            fitted[i] = base[i] + coef[0]  # the value at d = 0
         fitted /= np.maximum(np.linalg.norm(fitted, axis=1, keepdims=True), 1e-12)
         cross = np.linalg.norm(np.cross(raw, fitted), axis=1)
         r = np.degrees(np.arctan2(cross, np.sum(raw * fitted, axis=1)))

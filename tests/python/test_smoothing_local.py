@@ -59,3 +59,59 @@ def test_degenerate_inputs_give_values_not_errors():
     assert abs(smoothing.two_pass_local_directions([1], [20.0], [10.0], None)[0][0] - 20.0) < 1e-9
     assert smoothing.two_pass_local_directions([1, 2], [None, None], [None, None], None) == \
         ([None, None], [None, None])
+
+
+def doubted_start(seed=3):
+    """A morning of 32 frames whose first ten were doubted (confidence
+    0.05-0.41) and drift from 6 deg too low a Sun back to the path (the
+    sky's evidence along long low-Sun shadows, suite scene 27), the rest
+    confident with 0.3 deg noise. (times s, truth, raw zenith, raw azimuth,
+    confidence)"""
+    hours = np.linspace(-5.0, -2.6, 32)
+    truth = sun_path(hours, latitude=20.0)
+    rng = np.random.default_rng(seed)
+    raw_z = [z + rng.normal(0, 0.3) for z, _ in truth]
+    raw_a = [a + rng.normal(0, 0.3) for _, a in truth]
+    conf = [0.85] * 32
+    for k in range(10):
+        conf[k] = 0.05 + 0.04 * k
+        raw_z[k] += 6.0 - 0.5 * k
+    return list(hours * 3600.0), truth, raw_z, raw_a, conf
+
+
+def test_a_doubted_run_follows_the_prior_path_offset_by_the_confident_frames():
+    t, truth, raw_z, raw_a, conf = doubted_start()
+    # The prior (the segment's Sun circle) is itself 1 deg too low: the fit
+    # takes its shape, not its place.
+    prior_z = [z + 1.0 for z, _ in truth]
+    prior_a = [a for _, a in truth]
+    zs, azs = smoothing.two_pass_local_directions(t, raw_z, raw_a, conf,
+                                                  prior_zenith=prior_z, prior_azimuth=prior_a)
+    errors = [angle(zs[k], azs[k], *truth[k]) for k in range(len(t))]
+    assert max(errors) < 0.5, max(errors)
+    # Without a prior the window stays put and follows the doubted run.
+    zn, an = smoothing.two_pass_local_directions(t, raw_z, raw_a, conf)
+    assert max(angle(zn[k], an[k], *truth[k]) for k in range(len(t))) > 3.0
+    # A prior with a gap is no prior.
+    gap_z = list(prior_z)
+    gap_z[5] = None
+    assert smoothing.two_pass_local_directions(t, raw_z, raw_a, conf, prior_zenith=gap_z,
+                                               prior_azimuth=prior_a) == (zn, an)
+
+
+def test_without_a_prior_the_window_does_not_widen_at_a_doubted_end():
+    """An equinox afternoon to sunset whose last frames are right but
+    doubted (Marseille March): a window widened toward the confident frames
+    is one-sided there and fits a line through the path's curve (6 deg off
+    here, 11 on the clip); without a prior the window keeps its width."""
+    hours = np.linspace(-1.0, 5.5, 32)
+    truth = sun_path(hours, latitude=43.0, declination=0.0)
+    rng = np.random.default_rng(1)
+    raw_z = [z + rng.normal(0, 0.2) for z, _ in truth]
+    raw_a = [a + rng.normal(0, 0.2) for _, a in truth]
+    conf = [0.9] * 28 + [0.1] * 4
+    t = list(hours * 3600.0)
+    zs, azs = smoothing.two_pass_local_directions(t, raw_z, raw_a, conf)
+    assert max(angle(zs[k], azs[k], *truth[k]) for k in range(len(t))) < 0.4
+    wide = smoothing.two_pass_local_directions(t, raw_z, raw_a, conf, half_window=t[-1] - t[0])
+    assert max(angle(wide[0][k], wide[1][k], *truth[k]) for k in range(len(t))) > 3.0

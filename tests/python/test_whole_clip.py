@@ -294,3 +294,35 @@ def test_frames_past_the_confident_span_follow_the_circle_not_the_fit():
             # Never further from the span's end than the Sun moves (15.5
             # deg an hour, 6 minutes a frame), whatever the raw Suns do.
             assert angles.angle_between_deg(got, end) <= 1.55 * (k - confident + 1) + 1e-6, k
+
+
+def test_a_doubted_run_is_carried_by_the_circle_and_the_confident_frames():
+    """A segment's first ten frames doubted by the evidence (confidence
+    0.05-0.41) and drifting from a 6 deg too low Sun back to the path:
+    two-pass smoothing fits the raw Suns' offsets from the segment's circle
+    with a window that widens over them, so the confident frames carry
+    them; without the circle it follows them."""
+    n = 32
+    frames = list(range(1, n + 1))
+    times = frame_times(n)
+    rng = np.random.default_rng(5)
+    raws = []
+    for k, f in enumerate(frames):
+        z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
+        z, a = float(z) + rng.normal(0, 0.3), float(a) + rng.normal(0, 0.3)
+        if k < 10:
+            raws.append((f, z + 6.0 - 0.5 * k, a % 360.0, 0.05 + 0.04 * k, None, None))
+        else:
+            raws.append((f, z, a % 360.0, 0.85, None, None))
+    raws, circle = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
+    assert circle
+    opts = pipeline.RunOptions()
+    for along, worst in ((circle, 0.6), (None, None)):
+        zs, azs = pipeline._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
+                                            along)
+        errors = [error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), sun_on_its_circle(k))
+                  for k in range(n)]
+        if worst is not None:
+            assert max(errors) < worst, max(errors)
+        else:
+            assert max(errors) > 2.0, max(errors)
