@@ -553,8 +553,10 @@ bool VideoReader::Seek(int index) {
   }
   Movie& mv = *movie_;
   if (index == position_ && (mv.pending || !mv.drained)) return true;
-  // Close ahead: decoding forward is exact and cheaper than a seek.
-  if (!mv.drained && index > position_ && index <= position_ + 50) {
+  // Close ahead: decoding forward is exact and cheaper than a seek, unless
+  // a key frame lies between: decoding from it is shorter.
+  if (!mv.drained && index > position_ && index <= position_ + 50 &&
+      KeyFrameAtOrBefore(index) <= position_) {
     while (position_ < index) {
       if (!mv.pending) {
         const int err = mv.decoder.Next();

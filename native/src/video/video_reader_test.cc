@@ -315,6 +315,14 @@ TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
   EXPECT_EQ(r.KeyFrameAtOrBefore(100), 90);
   EXPECT_EQ(r.KeyFrameAtOrBefore(29), 0);
   EXPECT_EQ(r.position(), 61);
+  // Close ahead across a key frame (from it, not through the frames
+  // before it) and close ahead within a group: the exact frames.
+  for (int target : {95, 99, 119}) {
+    ASSERT_TRUE(r.Seek(target)) << target;
+    ASSERT_TRUE(r.Read(&f)) << target;
+    EXPECT_EQ(r.last_frame().index, target);
+    EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * target, 4) << target;
+  }
   EXPECT_EQ(r.SeekNear(120), -1);
 }
 
