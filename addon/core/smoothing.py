@@ -237,6 +237,12 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
     return z_out, a_out
 
 
+def _tricube(d):
+    """The local fits' tricube kernel at offsets d, in half windows (the
+    callers take only the frames within the window, |d| < 1)."""
+    return (1.0 - np.abs(d) ** 3) ** 3
+
+
 # Where a frame's neighbours carry little confidence, its window widens (by
 # WINDOW_GROWTH steps, up to MAX_HALF_WINDOW_FRAMES) until their mean
 # confidence, weighted by the kernel as the fit weighs them, is at least
@@ -310,7 +316,7 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
             while h < widest:
                 near = order[np.searchsorted(ts, t[i] - h, side="right"):
                              np.searchsorted(ts, t[i] + h, side="left")]
-                kern = (1.0 - np.abs((t[near] - t[i]) / h) ** 3) ** 3
+                kern = _tricube((t[near] - t[i]) / h)
                 if float(kern @ w[near]) >= need * float(kern.sum()):
                     break
                 h = min(widest, WINDOW_GROWTH * h)
@@ -323,7 +329,7 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
         for i in range(n):
             near = order[lo[i]:hi[i]]
             d = (t[near] - t[i]) / windows[i]
-            kern = (1.0 - np.abs(d) ** 3) ** 3 * w[near] * robust[near]
+            kern = _tricube(d) * w[near] * robust[near]
             sel = kern > 0
             if not sel.any():  # no measured neighbour: the nearest measured frame
                 j = int(np.flatnonzero(good)[np.argmin(np.abs(t[good] - t[i]))])
