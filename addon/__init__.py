@@ -17,12 +17,12 @@ bl_info = {
 
 if "bpy" in locals():  # script reload (F3 › Reload Scripts)
     import importlib
-    for _m in (native_loader, properties, operators, panels, overlay):  # noqa: F821
+    for _m in (properties, operators, panels, overlay):  # noqa: F821
         importlib.reload(_m)
 
 import bpy  # noqa: E402
 
-from . import native_loader, operators, overlay, panels, properties  # noqa: E402, F401
+from . import operators, overlay, panels, properties  # noqa: E402
 
 _modules = (properties, operators, panels, overlay)
 _cli_handle = None

@@ -151,7 +151,8 @@ def measure_balance(context, track, frames):
     ground names): the footage's real shadows on `frames` (the model's cast
     shadow toward the tracked Sun against the lit ground beside it); frames
     where too little shadow shows are left out."""
-    from . import operators, pipeline  # operators imports this module
+    from . import operators  # operators imports this module
+    from .estimate import errors, frames as clip_frames
     settings = context.scene.sunlapse
     model, cam, clip = operators.gather_all(context, settings)
     names = operators.ground_names(settings, model) or bridge.guess_ground(model)
@@ -159,21 +160,21 @@ def measure_balance(context, track, frames):
     if not ids:
         return [], names
     scene_n, camera_n = bridge.build_scene(model), bridge.build_camera(cam)
-    from . import acquire
+    from .estimate import notes
     out = []
     for f in frames:
         est = track.frame(f)
         if est is None or not est.has_estimate:
             continue
         try:
-            bgr = pipeline.read_frame(clip.filepath, f - clip.frame_start)
-        except pipeline.PipelineError:
+            bgr = clip_frames.read_frame(clip.filepath, f - clip.frame_start)
+        except errors.EstimateError:
             continue
         if bgr.shape[0] != camera_n.height or bgr.shape[1] != camera_n.width:
             continue
         sun = lamp.sun_vector(est.zenith_deg, est.azimuth_deg + track.north_offset_deg)
-        ground, shadow = acquire.ground_and_model_shadow(scene_n, camera_n, ids, tuple(sun),
-                                                         settings.ignore_top_rows)
+        ground, shadow = notes.ground_and_model_shadow(scene_n, camera_n, ids, tuple(sun),
+                                                       settings.ignore_top_rows)
         rgb = arlight.srgb_to_linear(bgr[..., ::-1] / 255.0)
         bal = arlight.measure_shadow_balance(rgb, ground > 0, shadow > 0)
         if bal is None:
@@ -181,7 +182,7 @@ def measure_balance(context, track, frames):
         seen = []
         for mask in (bal.shadow_mask, bal.lit_mask):
             rows, cols = np.nonzero(mask)
-            _, origins = acquire.ground_samples(scene_n, camera_n, ids, rows, cols)
+            _, origins = notes.ground_samples(scene_n, camera_n, ids, rows, cols)
             seen.append(arlight.sky_seen(origins, lambda o, d: scene_n.occluded(o, d)))
         out.append((f, est.zenith_deg, bal, seen[0], seen[1]))
     return out, names
@@ -402,8 +403,8 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     balances = []
     if balance and track is not None:
         frames = [f.frame for f in results.estimated_frames(track)]
-        from . import acquire
-        picks = acquire.spread(frames, BALANCE_FRAMES)
+        from .estimate import notes
+        picks = notes.spread(frames, BALANCE_FRAMES)
         balances, ground_names = measure_balance(context, track, picks)
     checked = None
     if balances:

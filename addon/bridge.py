@@ -14,7 +14,7 @@ from typing import List, Optional, Sequence
 import bpy
 import numpy as np
 
-from . import native_loader
+from .estimate import native_loader
 
 
 class SceneError(Exception):

@@ -357,7 +357,8 @@ def save_blend_atomically(path):
 
 def _run(argv, interrupt):
     import bpy
-    from . import ar, bridge, native_loader, operators, pipeline, register, results
+    from . import ar, bridge, operators, register, results
+    from .estimate import errors, native_loader, run as estimate_run
     from .core import trackfile
 
     args = parse_args(argv)
@@ -407,12 +408,14 @@ def _run(argv, interrupt):
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "
               f"(Ctrl-C stops)", flush=True)
-        track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers,
-                             options, progress=interrupt.progress)
+        track = estimate_run.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers,
+                                 options, progress=interrupt.progress)
     except bridge.SceneError as e:
         fail(EXIT_SCENE, str(e))
-    except pipeline.PipelineError as e:
-        interrupt.check()  # "cancelled" by Ctrl-C
+    except errors.Cancelled:
+        interrupt.check()  # Ctrl-C cancelled the run
+        fail(EXIT_INTERRUPTED, "cancelled: nothing written, existing files left as they were")
+    except errors.EstimateError as e:
         fail(EXIT_SCENE, str(e))
     interrupt.check()
     summary = operators.finish_run(context, track, clip,

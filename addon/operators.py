@@ -8,7 +8,9 @@ import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from . import ar, bridge, lamp, native_loader, pipeline, results
+from . import ar, bridge, lamp, results
+from .estimate import errors, frames as clip_frames, native_loader, thesis
+from .estimate import options as estimate_options, run as estimate_run
 from .core import exif, frametimes, trackfile
 
 
@@ -98,11 +100,11 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
             if not clip.frame_start <= frame <= clip.frame_end:
                 raise bridge.SceneError(f"frame {frame} is outside the clip "
                                         f"({clip.frame_start}-{clip.frame_end})")
-            options = pipeline.RunOptions(method=settings.method,
-                                          ignore_top_rows=settings.ignore_top_rows)
-            bgr = pipeline.read_frame(clip.filepath, frame - clip.frame_start)
-            init = pipeline.estimate_initial(native_scene, native_camera, bgr, options)
-        except (bridge.SceneError, pipeline.PipelineError, RuntimeError, ValueError) as e:
+            options = estimate_options.EstimateOptions(
+                method=settings.method, ignore_top_rows=settings.ignore_top_rows)
+            bgr = clip_frames.read_frame(clip.filepath, frame - clip.frame_start)
+            init = thesis.estimate_initial(native_scene, native_camera, bgr, options)
+        except (bridge.SceneError, errors.EstimateError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         if not init["success"]:
@@ -195,7 +197,7 @@ def prepare_run(context, settings=None, collection=None, ground=None, frames=Non
                       min(clip.frame_end, settings.frame_end))
     if frames[0] > frames[1]:
         raise bridge.SceneError(f"empty frame range {frames[0]}-{frames[1]}")
-    options = pipeline.RunOptions(
+    options = estimate_options.EstimateOptions(
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
         north_offset_deg=bridge.scene_north_offset_deg(context), ground_object_ids=ids)
@@ -372,9 +374,9 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         scene_n, camera_n, clip, frames, options, extra = self._job
         RUN.update(running=True, fraction=0.0, cancel=False, thread=None)
         try:
-            track = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames,
-                                 options)
-        except (pipeline.PipelineError, ValueError) as e:
+            track = estimate_run.run(scene_n, camera_n, clip.filepath, clip.frame_start, frames,
+                                     options)
+        except (errors.EstimateError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         finally:
@@ -399,8 +401,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
                 RUN["fraction"] = fraction
                 return not RUN["cancel"]
             try:
-                self._result = pipeline.run(scene_n, camera_n, clip.filepath, clip.frame_start,
-                                            frames, options, progress)
+                self._result = estimate_run.run(scene_n, camera_n, clip.filepath,
+                                                clip.frame_start, frames, options, progress)
             except Exception as e:  # reported on the main thread
                 self._error = e
 
@@ -439,8 +441,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         if self._thread.is_alive():
             return {"PASS_THROUGH"}
         self._end(context)
-        stopped = (isinstance(self._error, pipeline.PipelineError)
-                   and str(self._error) == "cancelled")
+        stopped = isinstance(self._error, errors.Cancelled)
         if self._error is not None and not stopped:
             RUN["outcome"] = f"failed: {type(self._error).__name__}: {self._error}"
             self.report({"ERROR"}, f"Estimate failed: {self._error}")

@@ -9,7 +9,7 @@ sidebar width.
 
 import bpy
 
-from . import native_loader
+from .estimate import native_loader
 
 
 def _wrap(text, width_px, measure):

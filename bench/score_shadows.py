@@ -8,7 +8,7 @@ pixels (precision, recall) and shadow edges (within 1 px):
            estimated Sun (what the tracker matches to the image);
   "model+image": those plus the hard shadows the model does not explain,
            found in the frame against the clip's shadow-free background
-           (pipeline.detect_unmodelled_shadows, as a run does on its anchor
+           (estimate/notes.detect_unmodelled_shadows, as a run does on its anchor
            frame): casters that are in the footage but not in the model.
 Prints one line "SHADOWS {json}".
 """
@@ -24,7 +24,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(HERE), "examples"))
 import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
-from sunlapse import acquire, bridge, pipeline  # noqa: E402
+from sunlapse import bridge  # noqa: E402
+from sunlapse.estimate import frames as estimate_frames, notes  # noqa: E402
 from sunlapse.core import angles, trackfile  # noqa: E402
 
 
@@ -59,7 +60,7 @@ def scores(pred, gt, on_ground):
 def clip_frames(clip, frames):
     """uint8 BGR of the given scene frames (None where unreadable)."""
     out = {}
-    reader = pipeline.open_clip(clip.filepath, 0)
+    reader = estimate_frames.open_clip(clip.filepath, 0)
     for f in frames:
         try:
             bgr = reader.read() if reader.seek(f - clip.frame_start) else None
@@ -78,7 +79,7 @@ def main(track_path, truth_path):
     scene = bridge.build_scene(model)
     ground_ids = model.ids_of(truth.extra.get("ground_objects", ["Ground"]))
     masks = sorted(truth.extra.get("shadow_masks", {}).items(), key=lambda kv: int(kv[0]))
-    samples = acquire.spread([f.frame for f in truth.frames])
+    samples = notes.spread([f.frame for f in truth.frames])
     bgr = clip_frames(clip, sorted(set(samples) | {int(f) for f, _ in masks}))
     rows = []
     for frame, rel in masks:
@@ -88,10 +89,10 @@ def main(track_path, truth_path):
         d = tuple(angles.sun_in_world_from_geographic(est.zenith_deg, est.azimuth_deg,
                                                       track.north_offset_deg))
         f = bgr.get(int(frame))
-        found = None if f is None else pipeline.detect_unmodelled_shadows(
+        found = None if f is None else notes.detect_unmodelled_shadows(
             scene, cam, ground_ids, f, d, [bgr[s] for s in samples])
         if found is None:
-            ground, shadow = acquire.ground_and_model_shadow(scene, cam, ground_ids, d)
+            ground, shadow = notes.ground_and_model_shadow(scene, cam, ground_ids, d)
         else:
             ground, shadow = found["ground"], found["model_shadow"]
         on_ground = ground > 0

@@ -83,7 +83,7 @@ bpy.ops.preferences.addon_install(filepath='$legacy_zip')
 addon_utils.enable('sunlapse', default_set=True)
 import sunlapse
 assert sunlapse.__file__.startswith('$user34'), sunlapse.__file__
-print('native:', sunlapse.native_loader.require().__file__)
+print('native:', sunlapse.estimate.native_loader.require().__file__)
 from sunlapse import cli
 sys.exit(cli.main(['--out', '$out/blender-3.4.sun.json']))
 " >"$out/blender-3.4.log" 2>&1 || { tail -15 "$out/blender-3.4.log"; exit 1; }

@@ -33,6 +33,11 @@ from typing import Any, Callable, Iterable, List, Optional, Sequence, Tuple, Uni
 
 import numpy as np
 
+from . import finish, frames as clip_frames, motion, native_loader, notes
+from .errors import Cancelled, EstimateError
+from .options import GAMMA
+from ..core import angles, frametimes, trimmed_circle
+
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
 REFERENCE_FRAMES = 24
@@ -41,11 +46,6 @@ REFERENCE_FRAMES = 24
 # bytes) instead of being decoded again.
 SHORT_CLIP_FRAMES = 4 * REFERENCE_FRAMES
 REFERENCE_KEEP_BYTES = 256 << 20
-# A refined Sun further than this from the path's direction is not believed
-# (the tracker locked onto something else); the path's own direction is a
-# grid cell that the evidence's ridge along the shadows can leave a few
-# degrees off.
-REFINE_MAX_DEG = 8.0
 # The estimate works on frames at most this wide: larger ones are reduced
 # (area average, by a power of two) as they are decoded, before they are
 # made linear, and both the sky's evidence and the shadow tracker see them
@@ -65,10 +65,6 @@ FULL_CONFIDENCE_MARGIN = 12.0
 # frame is refined again around the path's direction, and a result still
 # that far keeps half its confidence.
 AGREE_DEG = 4.0
-# The Sun's apparent motion bound (deg per hour), and per frame when the
-# frames' times are unknown (sun_path.h's generous bound).
-SUN_DEG_PER_HOUR = 15.5
-UNTIMED_STEP_DEG = 12.0
 # Confidence of frames without sky evidence of their own: carried by the
 # path alone; followed by the tracker between frames with evidence (its
 # sub-pixel fit sees thin shadows the sky's samples miss); followed past the
@@ -125,10 +121,6 @@ class WholeClipResult:
     message: Optional[str] = None
 
 
-class Cancelled(Exception):
-    """The progress callback asked to stop."""
-
-
 def _angle_deg(a, b) -> float:
     """Angle between two 3-vectors (deg); plain floats, as it runs per frame
     (numpy's per-call overhead was most of the check's time)."""
@@ -137,15 +129,6 @@ def _angle_deg(a, b) -> float:
     cross = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
                       + (ax * by - ay * bx) ** 2)
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
-
-
-def sun_motion_bound_deg(k: int, j: int, times_s: Optional[Sequence[float]]) -> float:
-    """How far the Sun can move between frames k and j (positions in the
-    run's frames; deg): from their capture times in seconds when known, else
-    a generous step per frame."""
-    if times_s is not None:
-        return abs(times_s[k] - times_s[j]) / 3600.0 * SUN_DEG_PER_HOUR
-    return abs(k - j) * UNTIMED_STEP_DEG
 
 
 def working_factor(width: int) -> int:
@@ -344,7 +327,11 @@ def estimate(native, scene, camera, frames: Sequence[int],
         index_of = {f: i for i, f in enumerate(rest)}
     else:
         frame_source, index_of = source(rest, size)
-    pass_options = native.ClipPassOptions(steer_deg=REFINE_MAX_DEG)
+    # A refined Sun further than steer_deg from the path's direction is not
+    # believed (the tracker locked onto something else): the pass's own
+    # steering limit, also the check's.
+    pass_options = native.ClipPassOptions()
+    refine_max_deg = pass_options.steer_deg
     done = native.run_clip_pass(
         frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
         [kept.get(f) for f in frames], starts, work, sky, tracker, pass_options,
@@ -417,7 +404,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     where = {"run": None, "last": None}  # the tracker's run and its last frame
 
     def motion_deg(k, j):
-        return sun_motion_bound_deg(k, j, times_s)
+        return motion.sun_motion_bound_deg(k, j, times_s, path_options)
 
     def restart(run, first):
         """A tracker for the frames read again: the pass's own, or, when it
@@ -428,7 +415,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
             return True
         gray = read_again(first)
         ok_start = gray is not None and native.start_tracker(
-            tracker, gray, directions[path["direction"][first]], REFINE_MAX_DEG)[0]
+            tracker, gray, directions[path["direction"][first]], refine_max_deg)[0]
         where["run"], where["last"] = run, first
         return ok_start
 
@@ -439,7 +426,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         tracker's own Sun is checked against the measured frames instead."""
         for j in (before[k], after[k]):
             d = directions[path["direction"][j]]
-            if _angle_deg(sun_in_world, d) > REFINE_MAX_DEG + motion_deg(k, j):
+            if _angle_deg(sun_in_world, d) > refine_max_deg + motion_deg(k, j):
                 return False
         return True
 
@@ -451,7 +438,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
         clock["done"] += 1
         tick(0.8 + 0.2 * clock["done"] / n)
         d = directions[path["direction"][anchor if beyond else k]]
-        limit = REFINE_MAX_DEG + (motion_deg(k, anchor) if beyond else 0.0)
+        limit = refine_max_deg + (motion_deg(k, anchor) if beyond else 0.0)
         refined = done.track(k)
         if refined is not None and not measured[k] and not beyond:
             if _angle_deg(refined.sun_in_world, d) > limit and not between(
@@ -537,3 +524,120 @@ def estimate(native, scene, camera, frames: Sequence[int],
                      "total_s": t_end, **sky_sizes,
                      "directions": len(directions), "spacing_deg": spacing}
     return result
+
+
+def run(scene, camera, clip_path, source, frames, visit, times, options, track, progress, t0):
+    """The default method: the Sun over the whole clip at once
+    (estimate/whole_clip.py), then smoothing per segment."""
+    native = native_loader.require()
+    north = options.north_offset_deg
+    # The frames spread over the clip for the reference levels are kept in
+    # colour, at the unmodelled-shadow note's size, for the clip's shadow-free
+    # background.
+    samples = {}
+    stride = notes.note_stride(camera)
+
+    def read_gray(f):
+        try:
+            bgr = source.read(f)
+        except StopIteration:
+            return "the clip ended before this frame"
+        if bgr is None:
+            return source.why_not()
+        return (clip_frames.wrong_size(bgr, camera)
+                or native.to_linear_gray(bgr, GAMMA[options.method]))
+
+    # The frames stream reduced to the estimate's working size: a clip of
+    # another size than the camera's would be reduced to it silently.
+    clip_frames.check_clip_size(source.reader.width, source.reader.height, camera)
+
+    def open_stream(fs, near, size):
+        # The reference frames also come in colour for the note, at its size.
+        try:
+            return native.FrameStream(
+                clip_path, [f - source.start for f in fs],
+                native.FrameStreamOptions(gamma=GAMMA[options.method], near=near,
+                                          keep_bgr=near, width=size[0], height=size[1],
+                                          bgr_width=-(-camera.width // stride),
+                                          bgr_height=-(-camera.height // stride)))
+        except ValueError as e:
+            raise EstimateError(f"cannot read the clip: {e}")
+
+    def stream(fs, near, size):
+        """The frames in order at `size`, decoded ahead on a native thread
+        (started now, before the first is asked for)."""
+        return streamed(open_stream(fs, near, size), near)
+
+    def frame_source(fs, size):
+        """The pass's frames at `size`: a native stream, and the index it
+        reports for each frame (its 0-based index in the clip)."""
+        pass_stream["stream"] = open_stream(fs, False, size)
+        return pass_stream["stream"], {f: f - source.start for f in fs}
+
+    def streamed(frame_stream, near):
+        start = source.start
+        past_end = native.StreamedFrameStatus.past_end
+        for got in frame_stream:
+            f = got.index + start
+            if got.gray is not None:
+                if near:
+                    samples[f] = got.bgr
+                yield f, got.gray
+            elif got.status == past_end:
+                yield f, "the clip ended before this frame"
+            else:
+                yield f, got.message or "frame not decodable"
+
+    pass_stream = {"stream": None}
+
+    seconds = None
+    if times is not None:
+        by_frame = dict(zip(frames, frametimes.seconds_since(times)))
+        seconds = [by_frame[f] for f in visit]
+    result = estimate(
+        native, scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
+        ignore_top_rows=options.ignore_top_rows,
+        progress=None if progress is None else (lambda x: progress(0.95 * x)),
+        stream=stream, source=frame_source, fit_circle=trimmed_circle.fit_trimmed)
+    track.method["initial"] = track.method["tracking"] = "whole_clip"
+    by_frame = {r.frame: r for r in result.frames}
+    raws = []
+    geographic = {}  # frame -> (zenith, geographic azimuth)
+    for f in frames:
+        r = by_frame[f]
+        if r.sun_in_world is None:
+            raws.append((f, None, None, r.confidence, r.reason, r.tracked))
+            continue
+        z, a_world = angles.angles_from_sun_in_world(r.sun_in_world)
+        geographic[f] = (float(z), float(angles.azimuth_geographic_from_world(a_world, north)))
+        raws.append((f, *geographic[f], r.confidence, r.reason, r.tracked))
+    raws, circle = finish.doubt_off_circle(raws, result.segments, frames, times, north)
+    if result.anchor is not None:
+        a = by_frame[result.anchor]
+        track.initial = {"frame": a.frame, "zenith_deg": geographic[a.frame][0],
+                         "azimuth_deg": geographic[a.frame][1],
+                         "residual": None, "confidence": a.confidence,
+                         "seconds": result.timing.get("table_s", 0.0)
+                         + result.timing.get("reference_s", 0.0),
+                         "message": "the best-supported frame of the whole-clip path"}
+        # Unmodelled shadows are looked for on the best-supported frame kept
+        # in colour (no frame is decoded again for the note).
+        kept = [f for f in samples if f in by_frame and by_frame[f].sun_in_world is not None]
+        if kept:
+            f = max(kept, key=lambda f: by_frame[f].confidence)
+            notes.note_unmodelled_shadows(track, scene, camera, f, samples[f],
+                                          by_frame[f].sun_in_world, list(samples.values()), options)
+    elif result.message:
+        track.extra["message"] = result.message
+    track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
+    if result.evidence:
+        track.extra["evidence"] = dict(result.evidence, frames=list(visit))
+    if result.jumps:
+        track.extra["jumps"] = result.jumps
+    finish.finish(native, track, raws, options, times, progress, result.segments,
+                  result.tracker_pixel_scale, circle)
+    wait = 0.0 if pass_stream["stream"] is None else pass_stream["stream"].wait_seconds
+    pass_stream["stream"] = None
+    track.extra["timing"] = dict(result.timing, decode_wait_s=wait,
+                                 total_s=time.perf_counter() - t0)
+    return track

@@ -63,7 +63,8 @@ def _file_outputs(scene, folder):
 def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     """Runs the artist's path on preset_dir/scene.blend and measures frame
     `frame`; returns a dict of per-channel ratios (insert, real) and counts."""
-    from sunlapse import ar, acquire, bridge, lamp, operators
+    from sunlapse import ar, bridge, lamp, operators
+    from sunlapse.estimate import notes as acquire
     from sunlapse.core import arlight, trackfile
     bpy.ops.wm.open_mainfile(filepath=os.path.join(preset_dir, "scene.blend"))
     import run_estimate  # noqa: F401  (examples/ on sys.path)
@@ -114,8 +115,8 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     real_ratio = np.median(plate[dark], axis=0) / np.median(plate[lit], axis=0)
     # The plate as the composite shows it against the frame the estimate
     # reads (OpenCV): 8-bit display levels.
-    from sunlapse import pipeline
-    bgr = pipeline.read_frame(clip.filepath, frame - clip.frame_start)
+    from sunlapse.estimate import frames as clip_frames
+    bgr = clip_frames.read_frame(clip.filepath, frame - clip.frame_start)
     plate_levels = np.abs(plate * 255.0 - bgr[..., ::-1].astype(np.float64))
     return {"insert": [float(x) for x in insert_ratio], "real": [float(x) for x in real_ratio],
             "plate_vs_reader_mean": float(plate_levels.mean()),

@@ -20,7 +20,7 @@ import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
 import ar_shadow_match  # noqa: E402
-from sunlapse import pipeline  # noqa: E402
+from sunlapse.estimate import frames as clip_frames  # noqa: E402
 from sunlapse.core import arlight  # noqa: E402
 
 args = sys.argv[sys.argv.index("--") + 1:]
@@ -66,7 +66,7 @@ else:                   # PNG: the view transform applied by Blender
     img = bpy.data.images.load(os.path.join(work, f"plate{tag}.png"))
     w, h = img.size
     shown = np.array(img.pixels[:]).reshape(h, w, -1)[::-1, :, :3] * 255
-read = pipeline.read_frame(bpy.path.abspath(clip.filepath), frame - 1)[..., ::-1].astype(float)
+read = clip_frames.read_frame(bpy.path.abspath(clip.filepath), frame - 1)[..., ::-1].astype(float)
 for c, name in enumerate("RGB"):
     a = np.vstack([read[..., c].ravel(), np.ones(read[..., c].size)]).T
     gain, off = np.linalg.lstsq(a, shown[..., c].ravel(), rcond=None)[0]

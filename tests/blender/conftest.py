@@ -26,7 +26,7 @@ def empty_scene():
 
 @pytest.fixture(scope="session")
 def native():
-    from sunlapse import native_loader
+    from sunlapse.estimate import native_loader
     return native_loader.require()
 
 

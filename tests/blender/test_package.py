@@ -20,7 +20,7 @@ REQUIRED = ["schema_version", "id", "version", "name", "tagline", "maintainer", 
 
 @pytest.fixture(scope="module")
 def packages(tmp_path_factory):
-    from sunlapse import native_loader
+    from sunlapse.estimate import native_loader
     module = native_loader.require().__file__
     return package.build([module], str(tmp_path_factory.mktemp("dist")))
 
@@ -70,11 +70,13 @@ def _loader_report(tmp_path, module_src, module_name):
     pkg = tmp_path / "pkg" / "fake_addon"
     pkg.mkdir(parents=True)
     (pkg / "__init__.py").write_text("")
-    shutil.copy(os.path.join(ROOT, "addon", "native_loader.py"), pkg)
+    (pkg / "estimate").mkdir()
+    (pkg / "estimate" / "__init__.py").write_text("")
+    shutil.copy(os.path.join(ROOT, "addon", "estimate", "native_loader.py"), pkg / "estimate")
     if module_src:
         shutil.copy(module_src, pkg / module_name)
     code = ("import sys; sys.path.insert(0, sys.argv[1]); "
-            "from fake_addon import native_loader as n;"
+            "from fake_addon.estimate import native_loader as n;"
             "print(n._native is None); print('\\n'.join(n.DIAGNOSIS))")
     out = subprocess.run(["/usr/bin/python3", "-c", code, str(tmp_path / "pkg")],
                          capture_output=True, text=True, timeout=60, check=True).stdout
@@ -82,7 +84,7 @@ def _loader_report(tmp_path, module_src, module_name):
 
 
 def test_loader_says_which_python_the_module_is_for(tmp_path):
-    from sunlapse import native_loader
+    from sunlapse.estimate import native_loader
     lines = _loader_report(tmp_path, native_loader.require().__file__,
                            "_native.cpython-313-x86_64-linux-gnu.so")
     assert lines[0] == "True"
@@ -91,7 +93,7 @@ def test_loader_says_which_python_the_module_is_for(tmp_path):
 
 
 def test_loader_names_the_missing_library(tmp_path):
-    from sunlapse import native_loader
+    from sunlapse.estimate import native_loader
     broken = tmp_path / "broken.so"
     shutil.copy(native_loader.require().__file__, broken)
     subprocess.run(["patchelf", "--replace-needed", "liberfa.so.1", "liberfa_gone.so.1",
@@ -115,7 +117,8 @@ def test_addon_zip_installs_and_enables_in_a_clean_blender(packages, tmp_path):
         f"bpy.ops.preferences.addon_install(filepath={legacy!r})\n"
         "addon_utils.enable('sunlapse', default_set=True)\n"
         "import sunlapse\n"
-        "ok = sunlapse.native_loader._native is not None and hasattr(bpy.types.Scene, 'sunlapse')\n"
+        "ok = (sunlapse.estimate.native_loader._native is not None\n"
+        "      and hasattr(bpy.types.Scene, 'sunlapse'))\n"
         "print('INSTALLED', ok, sunlapse.__file__)\n"
         "sys.exit(0 if ok else 1)\n")
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(tmp_path / "scripts"))

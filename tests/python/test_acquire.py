@@ -1,8 +1,8 @@
-"""The clip background and frame spreading (addon/acquire.py) used by the
+"""The clip background and frame spreading (addon/estimate/notes.py) used by the
 unmodelled-shadow note."""
 import numpy as np
 
-import acquire
+from sunlapse.estimate import notes as acquire
 
 
 def test_spread_takes_the_ends_and_never_more_than_asked():

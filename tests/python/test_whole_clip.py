@@ -1,5 +1,5 @@
 """The whole-clip estimator (addon/estimate/whole_clip.py) and its per-segment
-smoothing (pipeline._smooth_segments) on frames drawn from a small model: a
+smoothing (estimate/finish.py) on frames drawn from a small model: a
 pole, a box and a wall on a textured ground brighter far from the camera.
 No Blender: frames are drawn with the native ray caster."""
 import math
@@ -22,7 +22,7 @@ if "sunlapse" not in sys.modules:
 # would register its types twice.
 native = pytest.importorskip("_native")
 sys.modules.setdefault("sunlapse._native", native)
-from sunlapse import pipeline  # noqa: E402
+from sunlapse.estimate import finish, options as estimate_options  # noqa: E402
 from sunlapse.core import angles  # noqa: E402
 from sunlapse.estimate import whole_clip  # noqa: E402
 
@@ -120,9 +120,9 @@ def smooth(result):
         z, a = (None, None) if r.sun_in_world is None else angles.angles_from_sun_in_world(
             r.sun_in_world)
         raws.append((r.frame, z, a, r.confidence, r.reason, None))
-    opts = pipeline.RunOptions()
-    return pipeline._smooth_segments([r[0] for r in raws], raws, result.segments, "two_pass",
-                                     opts, None)
+    opts = estimate_options.EstimateOptions()
+    return finish._smooth_segments([r[0] for r in raws], raws, result.segments, "two_pass",
+                                   opts, None)
 
 
 def test_every_frame_within_a_degree_despite_a_gradient_and_broken_frames(world):
@@ -246,7 +246,7 @@ def frame_times(n):
 def test_suns_off_their_circle_lose_confidence():
     """The Sun's path over a segment is a small circle about the pole: raw
     Suns far off the circle fitted to the segment lose their confidence, the
-    further the more (pipeline._doubt_off_circle); the others keep it."""
+    further the more (finish.doubt_off_circle); the others keep it."""
     frames = list(range(1, 41))
     times = frame_times(40)
     off = {7: 8.0, 20: 6.0, 33: 10.0}
@@ -255,7 +255,7 @@ def test_suns_off_their_circle_lose_confidence():
         z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
         z = float(z) + off.get(f, 0.0)
         raws.append((f, z, float(a) % 360.0, 0.95, None, None))
-    out, _ = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
+    out, _ = finish.doubt_off_circle(raws, [frames], frames, times, 0.0)
     conf = {r[0]: r[3] for r in out}
     for f in frames:
         if f in off:
@@ -281,11 +281,11 @@ def test_frames_past_the_confident_span_follow_the_circle_not_the_fit():
         else:  # the tracker wanders off as the shadows fade
             raws.append((f, float(z) + 1.5 * (k - confident + 1), float(a) - 4.0 * (k - confident),
                          0.01, None, None))
-    raws, circle = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
-    opts = pipeline.RunOptions()
+    raws, circle = finish.doubt_off_circle(raws, [frames], frames, times, 0.0)
+    opts = estimate_options.EstimateOptions()
     for along, worst in ((circle, 0.3), (None, None)):
-        zs, azs = pipeline._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
-                                            along)
+        zs, azs = finish._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
+                                          along)
         end = angles.sun_in_world_from_angles(zs[confident - 1], azs[confident - 1])
         for k in range(confident, n):
             got = angles.sun_in_world_from_angles(zs[k], azs[k])
@@ -314,12 +314,12 @@ def test_a_doubted_run_is_carried_by_the_circle_and_the_confident_frames():
             raws.append((f, z + 6.0 - 0.5 * k, a % 360.0, 0.05 + 0.04 * k, None, None))
         else:
             raws.append((f, z, a % 360.0, 0.85, None, None))
-    raws, circle = pipeline._doubt_off_circle(raws, [frames], frames, times, 0.0)
+    raws, circle = finish.doubt_off_circle(raws, [frames], frames, times, 0.0)
     assert circle
-    opts = pipeline.RunOptions()
+    opts = estimate_options.EstimateOptions()
     for along, worst in ((circle, 0.6), (None, None)):
-        zs, azs = pipeline._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
-                                            along)
+        zs, azs = finish._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
+                                          along)
         errors = [error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), sun_on_its_circle(k))
                   for k in range(n)]
         if worst is not None:

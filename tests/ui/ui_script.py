@@ -357,7 +357,7 @@ if mode == "esc":
     # is even handled: each progress call is slowed down so that the worker
     # is still running when the cancel reaches it (as on a real clip).
     import time
-    _run = operators.pipeline.run
+    _run = operators.estimate_run.run
 
     def slow_run(*args, **kwargs):
         progress = args[6] if len(args) > 6 else kwargs.get("progress")
@@ -368,7 +368,7 @@ if mode == "esc":
             args = args[:6] + (slowed,) + args[7:] if len(args) > 6 else args
             kwargs = dict(kwargs, progress=slowed) if "progress" in kwargs else kwargs
         return _run(*args, **kwargs)
-    operators.pipeline.run = slow_run
+    operators.estimate_run.run = slow_run
 
 if mode == "walkthrough":
     os.makedirs(out, exist_ok=True)

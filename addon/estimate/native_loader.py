@@ -19,7 +19,9 @@ import os
 import sys
 import sysconfig
 
-ADDON_DIR = os.path.dirname(os.path.abspath(__file__))
+# The add-on's folder and package: this module sits in its estimate/ package.
+ADDON_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ADDON_PACKAGE = (__package__ or "").rpartition(".")[0]
 # A source checkout has the CMake project one level up.
 SOURCE_CHECKOUT = os.path.isfile(os.path.join(ADDON_DIR, os.pardir, "CMakeLists.txt")) and \
     os.path.isdir(os.path.join(ADDON_DIR, os.pardir, "native"))
@@ -29,7 +31,7 @@ SYSTEM_LIBS = {"libc.so.6", "libm.so.6", "libpthread.so.0", "libdl.so.2", "librt
 
 
 def _import_plain(name):
-    return importlib.import_module(name, __package__)
+    return importlib.import_module(name, ADDON_PACKAGE or None)
 
 
 def _candidates():

@@ -1,0 +1,56 @@
+"""Validate a run and dispatch it: the whole-clip estimate (ours), or the
+thesis's baseline and the tracker from a given Sun (estimate/thesis.py)."""
+
+from __future__ import annotations
+
+import time
+from typing import Callable, Optional, Sequence
+
+from . import frames as clip_frames, native_loader, thesis, whole_clip
+from .errors import EstimateError
+from .options import GAMMA, EstimateOptions
+from ..core import frametimes, trackfile
+
+
+def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
+        options: EstimateOptions, progress: Optional[Callable[[float], bool]] = None
+        ) -> trackfile.Track:
+    """Estimates the Sun on `frames` (consecutive scene frame numbers)."""
+    native_loader.require()
+    if not options.ground_object_ids:
+        raise EstimateError("no ground object: name the ground the shadows fall on "
+                            "(--ground, or Ground in the panel)")
+    frames = list(frames)
+    times = None
+    if options.frame_times is not None:
+        missing = [f for f in frames if f not in options.frame_times]
+        if missing:
+            more = " ..." if len(missing) > 5 else ""
+            raise EstimateError(f"the times file has no time for frame(s) "
+                                f"{', '.join(map(str, missing[:5]))}{more}")
+        times = [options.frame_times[f] for f in frames]
+    # Frames are visited in the order they were taken (decode order when the
+    # times are unknown): the tracker follows the shadow between neighbours
+    # in time, so an out-of-order frame is tracked where it belongs.
+    visit = [frames[i] for i in frametimes.chronological(frames, times)]
+    first = visit[0] - clip_frame_start
+    source = clip_frames.FrameSource(clip_frames.open_clip(clip_path, first), clip_frame_start,
+                                     first)
+    north = options.north_offset_deg
+    track = trackfile.Track(
+        frame_start=clip_frame_start, north_offset_deg=north,
+        method={"initial": options.method, "tracking": options.method,
+                "smoothing": options.smoothing,
+                "options": {"gamma": GAMMA[options.method]}})
+    if times is not None:
+        late = frametimes.out_of_order(frames, times)
+        track.extra["frame_times"] = {"first_utc": min(times).isoformat(),
+                                      "last_utc": max(times).isoformat(),
+                                      "out_of_order_frames": late}
+
+    t0 = time.perf_counter()
+    if options.method == "default" and options.initial_sun is None:
+        return whole_clip.run(scene, camera, clip_path, source, frames, visit, times, options,
+                              track, progress, t0)
+    return thesis.run_tracked(scene, camera, source, frames, visit, times, options, track,
+                              progress, t0)

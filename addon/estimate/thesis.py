@@ -1,0 +1,121 @@
+"""The thesis's way (the baseline, chapters 3 and 4), and the tracker alone
+from a given Sun: the initial Sun on the first frame in capture order, then
+the shadow tracker frame after frame."""
+
+from __future__ import annotations
+
+import time
+
+from . import finish, frames as clip_frames, native_loader, notes
+from .errors import Cancelled, EstimateError, check_progress
+from .options import EstimateOptions
+from ..core import angles, trackfile
+
+
+def estimate_initial(scene, camera, bgr, options: EstimateOptions, progress=None,
+                     gray=None) -> dict:
+    """The initial Sun on one frame (uint8 BGR, or its gray if already made);
+    the native result dict."""
+    native = native_loader.require()
+    if gray is None:
+        gray = clip_frames.gray(bgr, camera, options.method)
+    init = native.estimate_initial_sun(scene, camera, gray,
+                                       method=options.method,
+                                       ignore_top_rows=options.ignore_top_rows,
+                                       progress=progress)
+    if init["message"] == "cancelled":
+        raise Cancelled("cancelled")
+    return init
+
+
+def _given_initial(zenith_deg, azimuth_deg, north_offset_deg):
+    """An initial result dict for a Sun given by the user (world frame inside)."""
+    azimuth_world_deg = angles.azimuth_world_from_geographic(azimuth_deg, north_offset_deg)
+    return {"success": True, "message": "", "zenith_deg": zenith_deg,
+            "azimuth_deg": azimuth_world_deg,
+            "sun_in_world": tuple(angles.sun_in_world_from_angles(zenith_deg, azimuth_world_deg)),
+            "residual_rms": 0.0, "confidence": 1.0, "spread_deg": 0.0, "sun_intensity": None,
+            "ambient_intensity": None, "seconds": 0.0}
+
+
+def run_tracked(scene, camera, source, frames, visit, times, options, track, progress, t0):
+    """The thesis's way (the baseline), and the tracker alone from a given
+    Sun: the initial Sun on the first frame in capture order, then the
+    shadow tracker frame after frame."""
+    native = native_loader.require()
+    north = options.north_offset_deg
+    try:
+        bgr0 = source.read(visit[0])
+    except StopIteration:
+        bgr0 = None
+    if bgr0 is None:
+        raise EstimateError(f"frame {visit[0]} of the clip cannot be decoded")
+    gray0 = clip_frames.gray(bgr0, camera, options.method)
+    if options.initial_sun is not None:
+        init = _given_initial(*options.initial_sun, north)
+        track.method["initial"] = "given"
+    else:
+        init = estimate_initial(scene, camera, bgr0, options,
+                                None if progress is None else (lambda f: progress(0.1 * f)),
+                                gray=gray0)
+    if not init["success"]:
+        reason = f"initial Sun failed: {init['message']}"
+        track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
+        track.extra["message"] = reason
+        return track
+    az0 = (init["azimuth_deg"] - north) % 360.0
+    track.initial = {"frame": visit[0], "zenith_deg": init["zenith_deg"], "azimuth_deg": az0,
+                     "residual": init["residual_rms"], "confidence": init["confidence"],
+                     "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
+                     "ambient_intensity": init["ambient_intensity"],
+                     "seconds": init["seconds"], "message": init["message"] or None}
+    # Frames spread over the clip, kept as they stream past, make its
+    # shadow-free background for the unmodelled-shadow note (ours only).
+    sample_at = set(notes.spread(frames)) if options.method != "thesis" else set()
+    samples = {visit[0]: bgr0} if visit[0] in sample_at else {}
+    if options.method == "thesis":
+        tracker = native.ThesisTracker(scene, camera, options.ground_object_ids,
+                                       ignore_top_rows=options.ignore_top_rows)
+    else:
+        tracker = native.ShadowTracker(scene, camera, options.ground_object_ids,
+                                       ignore_top_rows=options.ignore_top_rows)
+    first = tracker.initialize(gray0, init["sun_in_world"])
+    raws = [(visit[0], init["zenith_deg"], az0, init["confidence"], None, first)]
+    if not first.ok:
+        track.extra["tracking_message"] = first.reason
+    track_seconds = 0.0
+    for k, f in enumerate(visit[1:], start=1):
+        check_progress(progress, 0.1 + 0.85 * k / len(visit))
+        try:
+            bgr = source.read(f)
+        except StopIteration:
+            raws.append((f, None, None, 0.0, "the clip ended before this frame", None))
+            continue
+        why = None
+        if bgr is None:
+            why = source.why_not()
+        elif bgr.shape[0] != camera.height or bgr.shape[1] != camera.width:
+            why = (f"frame is {bgr.shape[1]}x{bgr.shape[0]}, not the camera's "
+                   f"{camera.width}x{camera.height}: not the scene's footage")
+            bgr = None
+        if bgr is not None and f in sample_at:
+            samples[f] = bgr
+        r = tracker.track(None if bgr is None else clip_frames.gray(bgr, camera, options.method))
+        track_seconds += r.seconds
+        if why is not None:
+            raws.append((f, None, None, 0.0, why, None))
+        elif r.ok:
+            raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
+        else:
+            raws.append((f, None, None, 0.0, r.reason, r))
+    raws.sort(key=lambda r: r[0])  # back to frame order for smoothing and the file
+    if options.method != "thesis":
+        notes.note_unmodelled_shadows(track, scene, camera, visit[0], bgr0, init["sun_in_world"],
+                                      list(samples.values()), options)
+    finish.finish(native, track, raws, options, times, progress, [[r[0] for r in raws]])
+    track.extra["timing"] = {"initial_s": init["seconds"],
+                             "tracking_ms_per_frame": 1000.0 * track_seconds
+                             / max(1, len(frames) - 1),
+                             "total_s": time.perf_counter() - t0}
+    check_progress(progress, 1.0)
+    return track
