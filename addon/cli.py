@@ -429,8 +429,8 @@ def _run(argv, interrupt):
               f"{init['seconds']:.2f} s){' - ' + init['message'] if init.get('message') else ''}")
     else:
         print(f"sunlapse: warning: {track.frames[0].reason}")
-    if track.extra.get("model_hint"):
-        print(f"sunlapse: note: {track.extra['model_hint']}")
+    for hint in (p for p in track.problems if not p.is_warning):
+        print(f"sunlapse: note: {hint.message}")
     done = sum(1 for f in track.frames if f.has_estimate)
     timing = track.extra.get("timing", {})
     print(f"sunlapse: {done}/{len(track.frames)} frames estimated "

@@ -271,17 +271,16 @@ def finish_run(context, track, clip, extra):
     msg = (f"Sun estimated on {done}/{len(track.frames)} frames "
            f"({raw} measured, the rest from smoothing)")
     # What kept frames from a measurement, in the user's words.
-    problems = [track.extra.get(k) for k in ("message", "tracking_message", "smoothing_message")]
-    problems = [p for p in problems if p]
+    problems = [p.message for p in track.problems if p.is_warning]
     from collections import Counter
     reasons = Counter(f.reason for f in track.frames if f.raw_zenith_deg is None and f.reason)
-    if reasons and not track.extra.get("message"):
+    if reasons and track.problem("estimate") is None:
         reason, count = reasons.most_common(1)[0]
         problems.append(f"{count} frame(s): {reason}")
     if problems:
         msg += ": " + "; ".join(problems)
-    if track.extra.get("model_hint"):  # advisory: not a warning
-        msg += ". Note: " + track.extra["model_hint"]
+    for hint in (p for p in track.problems if not p.is_warning):  # advisory: not a warning
+        msg += ". Note: " + hint.message
     context.scene.sunlapse.last_report = msg
     return msg
 
@@ -289,7 +288,7 @@ def finish_run(context, track, clip, extra):
 def report_level(track):
     """WARNING when frames lack a measurement or a stage had to give up."""
     short = any(f.raw_zenith_deg is None for f in track.frames)
-    troubled = any(track.extra.get(k) for k in ("message", "tracking_message", "smoothing_message"))
+    troubled = any(p.is_warning for p in track.problems)
     return {"WARNING"} if short or troubled else {"INFO"}
 
 

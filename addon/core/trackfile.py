@@ -13,6 +13,7 @@ import math
 import os
 import tempfile
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any, Dict, List, Literal, Optional, overload
 
 FORMAT_TRACK = "sunlapse.track"
@@ -45,6 +46,46 @@ class FrameEstimate:
         return self.zenith_deg is not None and self.azimuth_deg is not None
 
 
+class ProblemKind(str, Enum):
+    """What a problem means for the user: a stage gave up (FAILED) or chose
+    another way (FELL_BACK), both warnings; or a hint to act on (HINT)."""
+    FAILED = "failed"
+    FELL_BACK = "fell_back"
+    HINT = "hint"
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Something a stage of the run reports to the user, in their words.
+    stage: "estimate", "tracking", "smoothing" or "model"."""
+    stage: str
+    kind: ProblemKind
+    message: str
+
+    @property
+    def is_warning(self) -> bool:
+        return self.kind != ProblemKind.HINT
+
+
+# The keys the track file has always carried each stage's message under
+# (kept for readers of files and scripts); "problems" lists them all.
+_PROBLEM_KEYS = {"estimate": "message", "tracking": "tracking_message",
+                 "smoothing": "smoothing_message", "model": "model_hint"}
+_LEGACY_KINDS = {"estimate": ProblemKind.FAILED, "tracking": ProblemKind.FAILED,
+                 "smoothing": ProblemKind.FELL_BACK, "model": ProblemKind.HINT}
+
+
+class NorthSource(str, Enum):
+    """Where the track's north came from: fitted with the ephemeris (place
+    and times), fitted as the Sun's circle about the pole, given with the
+    scene (the Sun Position add-on's north offset), or unknown (azimuths are
+    then relative to the scene's +Y)."""
+    EPHEMERIS = "ephemeris"
+    SUN_CIRCLE = "sun_circle"
+    GIVEN = "given"
+    UNKNOWN = "unknown"
+
+
 @dataclass
 class Track:
     clip: str = ""
@@ -54,6 +95,8 @@ class Track:
     method: Dict[str, Any] = field(default_factory=dict)
     initial: Optional[Dict[str, Any]] = None
     frames: List[FrameEstimate] = field(default_factory=list)
+    # What the run's stages report to the user (warnings and hints).
+    problems: List[Problem] = field(default_factory=list)
     # Anything a reader does not know is kept, so a round trip loses nothing.
     extra: Dict[str, Any] = field(default_factory=dict)
 
@@ -62,6 +105,27 @@ class Track:
             if f.frame == number:
                 return f
         return None
+
+    def report(self, stage: str, kind: ProblemKind, message: str) -> None:
+        """Records a stage's problem; a stage has one message (the latest)."""
+        self.problems = [p for p in self.problems if p.stage != stage]
+        self.problems.append(Problem(stage, kind, message))
+
+    def problem(self, stage: str) -> Optional[Problem]:
+        return next((p for p in self.problems if p.stage == stage), None)
+
+    def north_source(self) -> NorthSource:
+        if self.extra.get("sun_path_fit"):
+            return NorthSource.EPHEMERIS
+        if self.extra.get("sun_circle_fit"):
+            return NorthSource.SUN_CIRCLE
+        if self.north_offset_deg:
+            return NorthSource.GIVEN
+        return NorthSource.UNKNOWN
+
+    def north_known(self) -> bool:
+        """Whether azimuth_deg is geographic (clockwise from true north)."""
+        return self.north_source() != NorthSource.UNKNOWN
 
 
 def _num(value: Any) -> Optional[float]:
@@ -105,6 +169,12 @@ def _clean(value: Any) -> Any:
 
 def to_json(track: Track) -> Dict[str, Any]:
     d: Dict[str, Any] = dict(track.extra)
+    for p in track.problems:
+        if p.stage in _PROBLEM_KEYS:
+            d[_PROBLEM_KEYS[p.stage]] = p.message
+    if track.problems:
+        d["problems"] = [{"stage": p.stage, "kind": p.kind.value, "message": p.message}
+                         for p in track.problems]
     d.update({
         "format": track.format,
         "version": VERSION,
@@ -166,7 +236,26 @@ def write_track(path: str, track: Track) -> None:
 
 
 _KNOWN = {"format", "version", "clip", "frame_start", "north_offset_deg",
-          "method", "initial", "frames"}
+          "method", "initial", "frames", "problems", *_PROBLEM_KEYS.values()}
+
+
+def _problems_from_json(d: Dict[str, Any]) -> List[Problem]:
+    """The file's problems; from the stages' own keys in a file written
+    before "problems" was (its stage messages are the same text)."""
+    listed = d.get("problems")
+    if isinstance(listed, list):
+        out = []
+        for p in listed:
+            if not isinstance(p, dict):
+                raise ValueError("problems: an entry is not an object")
+            try:
+                kind = ProblemKind(p.get("kind"))
+            except ValueError:
+                raise ValueError(f"problems: unknown kind {p.get('kind')!r}")
+            out.append(Problem(str(p.get("stage", "")), kind, str(p.get("message", ""))))
+        return out
+    return [Problem(stage, _LEGACY_KINDS[stage], str(d[key]))
+            for stage, key in _PROBLEM_KEYS.items() if d.get(key)]
 
 
 @overload
@@ -296,6 +385,7 @@ def from_json(d: Dict[str, Any], source: str = "<track>") -> Track:
             if initial.get("zenith_deg") is not None and not 0 <= initial["zenith_deg"] <= 180:
                 raise ValueError(f"initial.zenith_deg is {initial['zenith_deg']}, "
                                  f"outside [0, 180]")
+        problems = _problems_from_json(d)
         raw_frames = d.get("frames")
         if raw_frames is None:
             raw_frames = []
@@ -323,6 +413,7 @@ def from_json(d: Dict[str, Any], source: str = "<track>") -> Track:
         method=method,
         initial=initial,
         frames=frames,
+        problems=problems,
         extra={k: v for k, v in d.items() if k not in _KNOWN},
     )
 

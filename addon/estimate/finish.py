@@ -30,9 +30,9 @@ def _sun_circle(track, numbers, raws, options, north):
     fit = suncircle.fit_circle(t, [r[1] for r in raws], world_az, [r[3] for r in raws],
                                times_are_seconds=real)
     if not fit.success:
-        track.extra["smoothing_message"] = (f"physical smoothing without a place fits the Sun's "
-                                            f"circle about the pole, which failed ({fit.message}); "
-                                            f"used two_pass")
+        track.report("smoothing", trackfile.ProblemKind.FELL_BACK,
+                     f"physical smoothing without a place fits the Sun's circle about the pole, "
+                     f"which failed ({fit.message}); used two_pass")
         track.method["smoothing"] = "two_pass"
         return None, None, north
     track.extra["sun_circle_fit"] = {
@@ -52,9 +52,9 @@ def _physical(native, track, numbers, raws, options, north):
         return _sun_circle(track, numbers, raws, options, north)
     need = (options.first_time, options.frame_seconds) if options.frame_times is None else ()
     if any(v is None for v in need):
-        track.extra["smoothing_message"] = ("physical smoothing with a place needs the frames' "
-                                            "times (a times file, or the first frame's time "
-                                            "and the seconds per frame); used two_pass")
+        track.report("smoothing", trackfile.ProblemKind.FELL_BACK,
+                     "physical smoothing with a place needs the frames' times (a times file, "
+                     "or the first frame's time and the seconds per frame); used two_pass")
         track.method["smoothing"] = "two_pass"
         return None, None, north
     times = sunpath.frame_times(options.first_time, options.frame_seconds, numbers) \
@@ -68,7 +68,8 @@ def _physical(native, track, numbers, raws, options, north):
                                options.latitude_deg, options.longitude_deg,
                                fit_latitude=options.fit_latitude)
     if not fit.success:
-        track.extra["smoothing_message"] = f"physical fit failed ({fit.message}); used two_pass"
+        track.report("smoothing", trackfile.ProblemKind.FELL_BACK,
+                     f"physical fit failed ({fit.message}); used two_pass")
         track.method["smoothing"] = "two_pass"
         return None, None, north
     track.extra["sun_path_fit"] = {

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import native_loader
 from .options import GAMMA
+from ..core import trackfile
 
 BACKGROUND_SAMPLES = 24
 
@@ -162,7 +163,7 @@ def note_unmodelled_shadows(track, scene, camera, frame, bgr, sun_in_world, samp
            and r["darkening"] <= HINT_MAX_DARKENING and not r["touches_model"]]
     if big:
         x, y = big[0]["centroid_px"]
-        track.extra["model_hint"] = (
+        track.report("model", trackfile.ProblemKind.HINT, (
             f"{len(big)} hard ground shadow(s) on frame {frame} are not cast by the model "
             f"(the largest, {big[0]['area_px']} px, around pixel ({x:.0f}, {y:.0f})): model "
-            f"their casters and the tracker will follow their shadows too")
+            f"their casters and the tracker will follow their shadows too"))

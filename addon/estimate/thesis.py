@@ -61,7 +61,7 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
     if not init["success"]:
         reason = f"initial Sun failed: {init['message']}"
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
-        track.extra["message"] = reason
+        track.report("estimate", trackfile.ProblemKind.FAILED, reason)
         return track
     az0 = (init["azimuth_deg"] - north) % 360.0
     track.initial = {"frame": visit[0], "zenith_deg": init["zenith_deg"], "azimuth_deg": az0,
@@ -82,7 +82,7 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
     first = tracker.initialize(gray0, init["sun_in_world"])
     raws = [(visit[0], init["zenith_deg"], az0, init["confidence"], None, first)]
     if not first.ok:
-        track.extra["tracking_message"] = first.reason
+        track.report("tracking", trackfile.ProblemKind.FAILED, first.reason)
     track_seconds = 0.0
     for k, f in enumerate(visit[1:], start=1):
         check_progress(progress, 0.1 + 0.85 * k / len(visit))

@@ -36,7 +36,7 @@ import numpy as np
 from . import finish, frames as clip_frames, motion, native_loader, notes
 from .errors import Cancelled, EstimateError
 from .options import GAMMA
-from ..core import angles, frametimes, trimmed_circle
+from ..core import angles, frametimes, trackfile, trimmed_circle
 
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
@@ -628,7 +628,7 @@ def run(scene, camera, clip_path, source, frames, visit, times, options, track, 
             notes.note_unmodelled_shadows(track, scene, camera, f, samples[f],
                                           by_frame[f].sun_in_world, list(samples.values()), options)
     elif result.message:
-        track.extra["message"] = result.message
+        track.report("estimate", trackfile.ProblemKind.FAILED, result.message)
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
     if result.evidence:
         track.extra["evidence"] = dict(result.evidence, frames=list(visit))
