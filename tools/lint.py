@@ -6,7 +6,8 @@ Each check prints the offending lines; the exit status is 1 when any check
 found something. Checks:
   clang-format  tracked C++ under native/ and bench/ (.clang-format)
   flake8        the Python under addon/, examples/, bench/, tests/, tools/
-  mypy          the bpy-free packages addon/<package>/ (core, ...)
+  mypy          the bpy-free packages addon/<package>/ (core, estimate; not the
+                glue library addon/blender/)
 Settings for flake8 and mypy live in setup.cfg.
 """
 
@@ -15,6 +16,7 @@ import glob
 import os
 import subprocess
 import sys
+import tempfile
 import time
 import xml.etree.ElementTree as ET
 
@@ -35,10 +37,10 @@ def tracked(*patterns):
         return sorted(found)
 
 
-def run(cmd):
+def run(cmd, env=None):
     """(found_something, output) of a checker that exits non-zero on findings."""
     try:
-        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env)
     except OSError as error:
         return True, f"{cmd[0]}: cannot run ({error}); tools/install.sh installs it"
     return proc.returncode != 0, (proc.stdout + proc.stderr).strip()
@@ -56,17 +58,33 @@ def check_flake8():
     return run([sys.executable, "-m", "flake8", "--show-source", *PYTHON_DIRS])
 
 
+# The Blender glue library: a package of addon/ that imports bpy.
+GLUE_PACKAGES = ("blender",)
+
+
 def bpy_free_packages():
-    """Every package inside addon/ (Blender glue lives in addon/*.py only)."""
+    """Every package inside addon/ but the glue (addon/blender/, addon/*.py)."""
     addon = os.path.join(ROOT, "addon")
     return sorted(name for name in os.listdir(addon)
-                  if os.path.isfile(os.path.join(addon, name, "__init__.py")))
+                  if os.path.isfile(os.path.join(addon, name, "__init__.py"))
+                  and name not in GLUE_PACKAGES)
 
 
 def check_mypy():
-    packages = [arg for name in bpy_free_packages() for arg in ("-p", name)]
-    return run([sys.executable, "-m", "mypy", "--pretty", "--no-error-summary",
-                "--cache-dir", os.path.join(ROOT, "build", "mypy-cache"), *packages])
+    """mypy on the bpy-free packages as Blender imports them (sunlapse.core,
+    sunlapse.estimate: they import each other relatively), through a
+    stand-in `sunlapse` package whose __init__ does not register with bpy."""
+    with tempfile.TemporaryDirectory() as tmp:
+        package = os.path.join(tmp, "sunlapse")
+        os.mkdir(package)
+        open(os.path.join(package, "__init__.py"), "w").close()
+        args = []
+        for name in bpy_free_packages():
+            os.symlink(os.path.join(ROOT, "addon", name), os.path.join(package, name))
+            args += ["-p", f"sunlapse.{name}"]
+        return run([sys.executable, "-m", "mypy", "--pretty", "--no-error-summary",
+                    "--cache-dir", os.path.join(ROOT, "build", "mypy-cache"), *args],
+                   env=dict(os.environ, MYPYPATH=tmp))
 
 
 CHECKS = {

@@ -38,7 +38,8 @@ class FrameSource:
 
     def __init__(self, reader, clip_frame_start: int, next_index: int):
         self.reader, self.start, self.next = reader, clip_frame_start, next_index
-        self.end = None  # first 0-based index past the clip's end, once known
+        # The first 0-based index past the clip's end, once known.
+        self.end: Optional[int] = None
 
     def why_not(self) -> str:
         """Why the last read() gave no frame (the reader's own report)."""

@@ -96,7 +96,8 @@ def missing_libraries(module_path, limit=200):
     """[(library, needed by)] that neither the module's folders nor the system
     provide, following bundled libraries' own needs."""
     import ctypes
-    missing, seen, todo = [], set(), [module_path]
+    missing, todo = [], [module_path]
+    seen: set = set()
     while todo and len(seen) < limit:
         path = todo.pop()
         info = _elf_needed(path)

@@ -4,7 +4,7 @@ capture times (bpy-free)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 # The thesis reads the grayscale frame as shading as it is (§3.2); ours
 # undoes the display gamma first, since the Lambertian model is linear.
@@ -32,7 +32,7 @@ class EstimateOptions:
     ground_object_ids: List[int] = field(default_factory=list)
     # Given Sun on the first frame (zenith, azimuth as in the track file):
     # skips the initial estimate, to measure the tracker alone.
-    initial_sun: Optional[tuple] = None
+    initial_sun: Optional[Tuple[float, float]] = None
     # For smoothing "physical": the first frame's time (aware datetime), the
     # seconds between frames and the place (degrees, east positive).
     first_time: Optional[object] = None

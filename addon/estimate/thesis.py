@@ -9,6 +9,7 @@ import time
 from . import finish, frames as clip_frames, native_loader, notes
 from .errors import Cancelled, EstimateError, check_progress
 from .options import EstimateOptions
+from .raw import RawSun
 from ..core import angles, trackfile
 
 
@@ -52,7 +53,8 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
         raise EstimateError(f"frame {visit[0]} of the clip cannot be decoded")
     gray0 = clip_frames.gray(bgr0, camera, options.method)
     if options.initial_sun is not None:
-        init = _given_initial(*options.initial_sun, north)
+        zenith_deg, azimuth_deg = options.initial_sun
+        init = _given_initial(zenith_deg, azimuth_deg, north)
         track.method["initial"] = "given"
     else:
         init = estimate_initial(scene, camera, bgr0, options,
@@ -63,7 +65,7 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
         track.frames = [trackfile.FrameEstimate(frame=f, reason=reason) for f in frames]
         track.report("estimate", trackfile.ProblemKind.FAILED, reason)
         return track
-    az0 = (init["azimuth_deg"] - north) % 360.0
+    az0 = angles.azimuth_geographic_from_world(init["azimuth_deg"], north)
     track.initial = {"frame": visit[0], "zenith_deg": init["zenith_deg"], "azimuth_deg": az0,
                      "residual": init["residual_rms"], "confidence": init["confidence"],
                      "spread_deg": init["spread_deg"], "sun_intensity": init["sun_intensity"],
@@ -80,7 +82,7 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
         tracker = native.ShadowTracker(scene, camera, options.ground_object_ids,
                                        ignore_top_rows=options.ignore_top_rows)
     first = tracker.initialize(gray0, init["sun_in_world"])
-    raws = [(visit[0], init["zenith_deg"], az0, init["confidence"], None, first)]
+    raws = [RawSun(visit[0], init["zenith_deg"], az0, init["confidence"], tracked=first)]
     if not first.ok:
         track.report("tracking", trackfile.ProblemKind.FAILED, first.reason)
     track_seconds = 0.0
@@ -89,7 +91,7 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
         try:
             bgr = source.read(f)
         except StopIteration:
-            raws.append((f, None, None, 0.0, "the clip ended before this frame", None))
+            raws.append(RawSun(f, reason="the clip ended before this frame"))
             continue
         why = None
         if bgr is None:
@@ -103,16 +105,17 @@ def run_tracked(scene, camera, source, frames, visit, times, options, track, pro
         r = tracker.track(None if bgr is None else clip_frames.gray(bgr, camera, options.method))
         track_seconds += r.seconds
         if why is not None:
-            raws.append((f, None, None, 0.0, why, None))
+            raws.append(RawSun(f, reason=why))
         elif r.ok:
-            raws.append((f, r.zenith_deg, (r.azimuth_deg - north) % 360.0, r.confidence, None, r))
+            raws.append(RawSun(f, r.zenith_deg, angles.azimuth_geographic_from_world(
+                r.azimuth_deg, north), r.confidence, tracked=r))
         else:
-            raws.append((f, None, None, 0.0, r.reason, r))
-    raws.sort(key=lambda r: r[0])  # back to frame order for smoothing and the file
+            raws.append(RawSun(f, reason=r.reason, tracked=r))
+    raws.sort(key=lambda r: r.frame)  # back to frame order for smoothing and the file
     if options.method != "thesis":
         notes.note_unmodelled_shadows(track, scene, camera, visit[0], bgr0, init["sun_in_world"],
                                       list(samples.values()), options)
-    finish.finish(native, track, raws, options, times, progress, [[r[0] for r in raws]])
+    finish.finish(native, track, raws, options, times, progress, [[r.frame for r in raws]])
     track.extra["timing"] = {"initial_s": init["seconds"],
                              "tracking_ms_per_frame": 1000.0 * track_seconds
                              / max(1, len(frames) - 1),

@@ -19,9 +19,14 @@ Frames in, raw per-frame Suns out:
    refined around the path's direction (no anchor frame, no re-acquisition
    heuristics). Only those frames are decoded twice.
 
-Smoothing and the track file are the caller's (pipeline.py); smoothing never
-crosses a segment boundary and never reaches past a segment's last measured
-frame.
+5. each segment's Sun circle fitted to its refined Suns, kept with the
+   result (the smoothing's prior) and lowering the confidence of frames far
+   off it.
+
+The controller (_WholeClip) takes these as named steps over one state;
+run() drives it over a clip and hands the raw Suns to finish.py: smoothing
+never crosses a segment boundary and never reaches past a segment's last
+measured frame.
 """
 
 from __future__ import annotations
@@ -29,13 +34,14 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import finish, frames as clip_frames, motion, native_loader, notes
 from .errors import Cancelled, EstimateError
 from .options import GAMMA
+from .raw import RawSun
 from ..core import angles, frametimes, trackfile, trimmed_circle
 
 # Frames spread over the clip whose high quantile per surface sample is its
@@ -91,19 +97,40 @@ PRIOR_MAX_RESIDUAL_DEG = 3.0
 PRIOR_STRAY_DEG = 4.0
 
 
+# A frame's Sun further than this from the Sun's circle about the pole,
+# fitted to its segment's confident frames, loses confidence with the square
+# of the ratio (half at 4.2 deg, a tenth at 9.5): on the randomised suite 15
+# of the 18 raw Suns more than 5 deg off at confidence >= 0.8 were over
+# 3 deg from it, and 7 of the 759 good ones. The sky's evidence can be
+# confidently wrong over a few frames (a pole's shadow along a paving
+# joint); the Sun's path over the segment cannot bend that way, and a Sun
+# far off it must not steer the smoothing either. The fit is trimmed
+# (core/trimmed_circle.py): a third of a segment's Suns stuck a few degrees to
+# one side (suite scene 16's low-Sun frames) pulled a Huber fit through
+# them, and they kept their confidence. Suns within CIRCLE_INLIER_FLOOR_DEG
+# of the circle always take part in the fit (a refined Sun's own scatter).
+CIRCLE_DOUBT_DEG = 3.0
+CIRCLE_INLIER_FLOOR_DEG = 1.5
+
+
 @dataclass
 class RawFrame:
     """One frame's raw estimate: the unit vector toward the Sun in the world
     frame (angles are the caller's: core.angles), or None with a reason when
-    the frame has no estimate."""
+    the frame has no estimate. confidence is the support of the frame's
+    evidence and the path; on_circle the same, lowered where the Sun is far
+    off its segment's circle (CIRCLE_DOUBT_DEG): the frame's confidence."""
     frame: int
     sun_in_world: Optional[np.ndarray] = None
     confidence: float = 0.0
+    on_circle: float = 0.0
     reason: Optional[str] = None
     segment: int = 0
     measured: bool = False        # the frame's own evidence supports it
     refined: bool = False         # the tracker refined it to sub-degree
     tracked: object = None        # native TrackedFrame when refined
+    # The Sun on its segment's circle about the pole, where one was fitted.
+    circle_in_world: Optional[np.ndarray] = None
 
 
 @dataclass
@@ -119,6 +146,34 @@ class WholeClipResult:
     # variance and the chosen direction's lead over far rivals.
     evidence: dict = field(default_factory=dict)
     message: Optional[str] = None
+
+
+@dataclass
+class _Path:
+    """The Sun's path over the run's frames (native solve_sun_path), per
+    frame: its grid direction (-1: none), whether a jump comes before it,
+    whether its own evidence supports it, and the evidence's figures."""
+    direction: List[int] = field(default_factory=list)
+    jump_before: List[bool] = field(default_factory=list)
+    measured: List[bool] = field(default_factory=list)
+    explained: List[float] = field(default_factory=list)
+    margin: List[float] = field(default_factory=list)
+    significance: List[float] = field(default_factory=list)
+    path_margin: List[float] = field(default_factory=list)
+
+
+def _path_from(solved) -> _Path:
+    return _Path(direction=[int(d) for d in solved["direction"]],
+                 jump_before=[bool(j) for j in solved["jump_before"]],
+                 measured=[bool(m) for m in solved["measured"]],
+                 explained=[float(v) for v in solved["explained"]],
+                 margin=[float(v) for v in solved["margin"]],
+                 significance=[float(v) for v in solved["significance"]],
+                 path_margin=[float(v) for v in solved["path_margin"]])
+
+
+def _solved(solved) -> bool:
+    return bool(solved["success"])
 
 
 def _angle_deg(a, b) -> float:
@@ -153,7 +208,7 @@ def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
     return list(zip(bounds[:-1], bounds[1:]))
 
 
-def _circle_prior(fit_circle: Callable[..., Any], path: dict,
+def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                   directions: Sequence[Sequence[float]],
                   times_s: Optional[Sequence[float]], n: int,
                   spacing_deg: float) -> Optional[np.ndarray]:
@@ -165,10 +220,10 @@ def _circle_prior(fit_circle: Callable[..., Any], path: dict,
     grid step."""
     prior = np.full((n, 3), np.nan)
     strayed = False
-    for lo, hi in _segments(path["jump_before"], n):
+    for lo, hi in _segments(path.jump_before, n):
         ks = list(range(lo, hi))
-        suns = [directions[path["direction"][k]]
-                if path["measured"][k] and path["direction"][k] >= 0 else None for k in ks]
+        suns = [directions[path.direction[k]]
+                if path.measured[k] and path.direction[k] >= 0 else None for k in ks]
         if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
             continue
         times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
@@ -183,7 +238,7 @@ def _circle_prior(fit_circle: Callable[..., Any], path: dict,
     return prior if strayed else None
 
 
-def _evidence_support(first: dict, again: dict,
+def _evidence_support(first: _Path, again: _Path,
                       directions: Sequence[Sequence[float]], spacing_deg: float) -> List[float]:
     """Per frame the path margin that the frames' confidence is built on,
     after the path was chosen again under the circle prior. The prior is
@@ -197,14 +252,14 @@ def _evidence_support(first: dict, again: dict,
     follows between frames with evidence; none left it at confidence 0 and
     let a wrong neighbour steer the smoothing)."""
     out = []
-    for k, margin in enumerate(again["path_margin"]):
-        d1, d2 = first["direction"][k], again["direction"][k]
+    for k, margin in enumerate(again.path_margin):
+        d1, d2 = first.direction[k], again.direction[k]
         if d1 < 0 or d2 < 0:
-            out.append(float(margin))
+            out.append(margin)
         elif _angle_deg(directions[d1], directions[d2]) <= 1.5 * spacing_deg:
-            out.append(min(float(margin), float(first["path_margin"][k])))
+            out.append(min(margin, first.path_margin[k]))
         else:
-            out.append(min(float(margin), FOLLOWED_CONFIDENCE * FULL_CONFIDENCE_MARGIN))
+            out.append(min(margin, FOLLOWED_CONFIDENCE * FULL_CONFIDENCE_MARGIN))
     return out
 
 
@@ -241,233 +296,276 @@ def estimate(native, scene, camera, frames: Sequence[int],
     memory (tests, synthetic clips). `times_s`: capture times in seconds
     (None when unknown). `native`: the compiled module, and `fit_circle`:
     the trimmed fit of the Sun's circle (core/trimmed_circle.py's
-    fit_trimmed; None: the path gets no circle prior), passed in, so this
-    controller imports nothing of the add-on's package."""
-    frames = list(frames)
-    n = len(frames)
-    result = WholeClipResult()
-    t0 = time.perf_counter()
+    fit_trimmed; None: the path gets no circle prior and no frame is
+    doubted off a circle), passed in, so this controller can be driven with
+    stand-ins."""
+    return _WholeClip(native, scene, camera, frames, read_gray, ground_object_ids, times_s,
+                      ignore_top_rows, progress, stream, source, fit_circle).run()
 
-    def tick(fraction):
-        if progress is not None and progress(fraction) is False:
-            raise Cancelled()
 
-    # Large frames are reduced (WORKING_MAX_WIDTH): `work` is the camera of
-    # the frames the evidence and the tracker see.
-    factor = working_factor(camera.width)
-    work = camera if factor == 1 else camera.resized(camera.width // factor,
-                                                     camera.height // factor)
-    size = (work.width, work.height)
-    top = -(-ignore_top_rows // factor)
-    result.tracker_pixel_scale = camera.width / work.width
+class _WholeClip:
+    """One whole-clip estimate: its state, and the steps run() takes over it
+    in order. Frames are addressed by k, their position in the run's frames
+    (capture order)."""
 
-    def reduced(image: Gray) -> Gray:
-        """A frame read by read_gray at the working size."""
-        gray = _frame(image)
-        if gray is None or gray.shape == (work.height, work.width):
-            return image
-        return native.resized_gray(gray, work.width, work.height)
+    def __init__(self, native, scene, camera, frames, read_gray, ground_object_ids, times_s,
+                 ignore_top_rows, progress, stream, source, fit_circle):
+        self.native, self.scene, self.camera = native, scene, camera
+        self.frames, self.n = list(frames), len(frames)
+        self.read_gray, self.stream, self.source = read_gray, stream, source
+        self.ground_ids, self.times_s = list(ground_object_ids), times_s
+        self.progress, self.fit_circle = progress, fit_circle
+        self.result = WholeClipResult()
+        self.t0 = time.perf_counter()
+        self.clock: Dict[str, float] = {}   # step -> seconds since t0 at its end
+        self.frames_read = 0
+        self.tracking_s = 0.0
+        self.checked = 0
+        # Large frames are reduced (WORKING_MAX_WIDTH): `work` is the camera
+        # of the frames the evidence and the tracker see.
+        factor = working_factor(camera.width)
+        self.factor = factor
+        self.work = camera if factor == 1 else camera.resized(camera.width // factor,
+                                                              camera.height // factor)
+        self.top = -(-ignore_top_rows // factor)
+        self.result.tracker_pixel_scale = camera.width / self.work.width
+        # Segments the caller knows of: capture times going back.
+        self.starts = [0] * self.n
+        if times_s is not None:
+            for k in range(1, self.n):
+                if times_s[k] < times_s[k - 1]:
+                    self.starts[k] = 1
+        # A refined Sun further than steer_deg from the path's direction is
+        # not believed (the tracker locked onto something else): the pass's
+        # own steering limit, also the check's.
+        self.pass_options = native.ClipPassOptions()
+        self.refine_max_deg = self.pass_options.steer_deg
+        self.path_options = native.SunPathOptions()
+        if times_s is not None:
+            # Known times say where the clip is continuous: the Sun cannot
+            # jump between frames minutes apart (time jumps are the segments).
+            self.path_options.jump_cost = -1.0
 
-    # The reference frames are decoded ahead while the table is cast.
-    wanted_reference = [frames[i] for i in spread(n)]
-    reference_frames: Iterable[Tuple[int, Gray]] = (
-        ((f, reduced(read_gray(f))) for f in wanted_reference) if stream is None
-        else stream(wanted_reference, True, size))
-    opts = native.SkyEvidenceOptions()
-    opts.ignore_top_rows = top
-    sky = native.SkyEvidence(scene, work, opts)
-    t_table = time.perf_counter() - t0
-    reference, kept = [], {}
-    budget = REFERENCE_KEEP_BYTES if n <= SHORT_CLIP_FRAMES else 0
-    wanted = set(frames)
-    for f, image in reference_frames:
-        gray = _frame(image)
-        reference.append(gray)
-        if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
-            kept[f], budget = gray, budget - gray.nbytes
-    used = sky.set_reference(reference)
-    used_frames = len(reference)
-    del reference
-    t_setup = time.perf_counter() - t0
-    if used == 0:
-        result.frames = [RawFrame(f, reason="no frame of the clip could be read") for f in frames]
-        result.message = "no frame of the clip could be read"
-        return result
+    def run(self) -> WholeClipResult:
+        kept = self.sky_table_and_reference()
+        if kept is None:
+            return self.result
+        self.clip_pass(kept)
+        if not self.solve_path():
+            return self.result
+        self.choose_again_under_circle_prior()
+        self.release_sky()
+        self.segments_and_evidence()
+        self.check_segments()
+        self.doubt_off_circle()
+        self.result.timing = self.timing()
+        return self.result
 
-    # Segments the caller knows of: capture times going back.
-    starts = [0] * n
-    if times_s is not None:
-        for k in range(1, n):
-            if times_s[k] < times_s[k - 1]:
-                starts[k] = 1
-    reads = {"count": used_frames}
+    # -- steps ---------------------------------------------------------
 
-    def read_again(k):
-        """Frame k at the working size: as the pass kept it, else read
-        again."""
-        # Frames the pass kept because the check was likely to want them.
-        gray = done.take_kept(k)
-        if gray is not None:
-            return gray
-        reads["count"] += 1
-        return _frame(reduced(read_gray(frames[k])))
+    def sky_table_and_reference(self) -> Optional[Dict[int, np.ndarray]]:
+        """The visibility table over the whole sky, cast while the reference
+        frames spread over the clip are decoded ahead; their levels set each
+        surface sample's reference. Returns the reference frames that are
+        frames of a short run, kept for the pass ({frame: gray}), or None
+        when no frame could be read."""
+        native, frames = self.native, self.frames
+        wanted_reference = [frames[i] for i in spread(self.n)]
+        size = (self.work.width, self.work.height)
+        reference_frames: Iterable[Tuple[int, Gray]] = (
+            ((f, self.reduced(self.read_gray(f))) for f in wanted_reference)
+            if self.stream is None else self.stream(wanted_reference, True, size))
+        opts = native.SkyEvidenceOptions()
+        opts.ignore_top_rows = self.top
+        self.sky = native.SkyEvidence(self.scene, self.work, opts)
+        self.mark("table")
+        reference: List[Optional[np.ndarray]] = []
+        kept: Dict[int, np.ndarray] = {}
+        budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES else 0
+        wanted = set(frames)
+        for f, image in reference_frames:
+            gray = _frame(image)
+            reference.append(gray)
+            if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
+                kept[f], budget = gray, budget - gray.nbytes
+        used = self.sky.set_reference(reference)
+        self.frames_read = len(reference)
+        self.mark("reference")
+        if used == 0:
+            why = "no frame of the clip could be read"
+            self.result.frames = [RawFrame(f, reason=why) for f in frames]
+            self.result.message = why
+            return None
+        return kept
 
-    # The pass over the clip, in native code without Python's lock: evidence
-    # for every frame, and the tracker following the shadows on the same
-    # frames (checked against the path afterwards).
-    usable_status = (int(native.FrameEvidenceStatus.OK),
-                     int(native.FrameEvidenceStatus.NO_SHADOWS))
-    directions = [tuple(d) for d in sky.directions.tolist()]
-    tracker = native.ShadowTracker(scene, work, list(ground_object_ids), ignore_top_rows=top,
-                                   subsamples=1 if factor > 1 else 0)
-    clock = {"tracking": 0.0, "done": 0}
-    rest = [f for f in frames if f not in kept]
-    if source is None:
-        frame_source = native.FrameList([(i, reduced(read_gray(f))) for i, f in enumerate(rest)])
-        index_of = {f: i for i, f in enumerate(rest)}
-    else:
-        frame_source, index_of = source(rest, size)
-    # A refined Sun further than steer_deg from the path's direction is not
-    # believed (the tracker locked onto something else): the pass's own
-    # steering limit, also the check's.
-    pass_options = native.ClipPassOptions()
-    refine_max_deg = pass_options.steer_deg
-    done = native.run_clip_pass(
-        frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
-        [kept.get(f) for f in frames], starts, work, sky, tracker, pass_options,
-        lambda x: progress is None or progress(0.8 * x) is not False)
-    del kept, frame_source
-    if done.cancelled:
-        raise Cancelled()
-    reads["count"] += len(rest)
-    clock["tracking"] += done.tracking_seconds
-    clock["start"] = done.start_seconds
-    tracker_started = done.tracker_started
-    # Per frame, in native memory (done.reason(k), done.track(k)): Python
-    # objects for every frame would cost kilobytes a frame on long clips.
-    usable_frames = np.isin(done.status, usable_status)
-    t_evidence = time.perf_counter() - t0
+    def clip_pass(self, kept: Dict[int, np.ndarray]) -> None:
+        """The pass over the clip, in native code without Python's lock:
+        evidence for every frame, and the tracker following the shadows on
+        the same frames (checked against the path afterwards)."""
+        native, frames = self.native, self.frames
+        self.directions = [tuple(d) for d in self.sky.directions.tolist()]
+        self.spacing_deg = self.sky.spacing_deg
+        self.tracker = native.ShadowTracker(self.scene, self.work, self.ground_ids,
+                                            ignore_top_rows=self.top,
+                                            subsamples=1 if self.factor > 1 else 0)
+        rest = [f for f in frames if f not in kept]
+        if self.source is None:
+            frame_source = native.FrameList([(i, self.reduced(self.read_gray(f)))
+                                             for i, f in enumerate(rest)])
+            index_of = {f: i for i, f in enumerate(rest)}
+        else:
+            frame_source, index_of = self.source(rest, (self.work.width, self.work.height))
+        progress = self.progress
+        self.done = native.run_clip_pass(
+            frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
+            [kept.get(f) for f in frames], self.starts, self.work, self.sky, self.tracker,
+            self.pass_options, lambda x: progress is None or progress(0.8 * x) is not False)
+        if self.done.cancelled:
+            raise Cancelled("cancelled")
+        self.frames_read += len(rest)
+        self.tracking_s += self.done.tracking_seconds
+        # Per frame, in native memory (done.reason(k), done.track(k)): Python
+        # objects for every frame would cost kilobytes a frame on long clips.
+        usable_status = (int(native.FrameEvidenceStatus.OK),
+                         int(native.FrameEvidenceStatus.NO_SHADOWS))
+        self.usable = np.isin(self.done.status, usable_status)
+        self.mark("evidence")
 
-    path_options = native.SunPathOptions()
-    if times_s is not None:
-        # Known times say where the clip is continuous: the Sun cannot jump
-        # between frames minutes apart (time jumps are the segments above).
-        path_options.jump_cost = -1.0
-    path = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
-                                 path_options)
-    if not path["success"]:
-        result.frames = [RawFrame(f, reason=path["message"] or done.reason(k) or "no evidence")
-                         for k, f in enumerate(frames)]
-        result.message = path["message"]
-        return result
-    t_path = time.perf_counter() - t0
-    prior = None if fit_circle is None else _circle_prior(
-        fit_circle, path, directions, times_s, n, sky.spacing_deg)
-    t_prior = time.perf_counter() - t0
-    if prior is not None:
-        again = native.solve_sun_path(sky, [] if times_s is None else list(times_s), starts,
-                                      path_options, prior)
-        if again["success"]:
-            path = dict(again, path_margin=_evidence_support(path, again, directions,
-                                                             sky.spacing_deg))
-    t_solved = time.perf_counter() - t0
-    spacing = sky.spacing_deg
-    sky_sizes = {"samples": sky.num_samples, "band_entries": sky.band_entries}
-    # The sky's table and every frame's kept costs (3 kB a frame) are done
-    # with: the check needs the path only.
-    del sky
-    bounds = [0]
-    for k in range(1, n):
-        if path["jump_before"][k]:
-            bounds.append(k)
-            if not starts[k]:
-                result.jumps.append(frames[k])
-    bounds.append(n)
-    margins = path["margin"]
-    measured = path["measured"]
-    result.evidence = {"explained": [round(float(v), 3) for v in path["explained"]],
-                       "margin": [round(float(v), 2) for v in margins],
-                       "significance": [round(float(v), 1) for v in path["significance"]],
-                       "path_margin": [round(float(v), 1) for v in path["path_margin"]],
-                       "path_sun_in_world": [[round(v, 5) for v in directions[d]]
-                                             for d in path["direction"]]}
-    best = max(range(n), key=lambda k: (measured[k], margins[k]))
-    result.anchor = frames[best] if measured[best] else None
-
-    # Each segment against the path, forward from its first measured frame,
-    # then back from it to the frames before. A frame the pass tracked to a
-    # Sun near the path keeps it; the others are read again and refined
-    # around the path's direction by the pass's tracker (or, where it never
-    # started, one started on the segment's first measured frame).
-    raws: List[RawFrame] = []
-    before, after = [0] * n, [0] * n  # nearest measured frames, in a segment's span
-    where = {"run": None, "last": None}  # the tracker's run and its last frame
-
-    def motion_deg(k, j):
-        return motion.sun_motion_bound_deg(k, j, times_s, path_options)
-
-    def restart(run, first):
-        """A tracker for the frames read again: the pass's own, or, when it
-        never started there, one started on frame `first` under the path's
-        Sun, once per run (segment, direction)."""
-        if where["run"] == run or tracker_started:
-            where["run"] = run
-            return True
-        gray = read_again(first)
-        ok_start = gray is not None and native.start_tracker(
-            tracker, gray, directions[path["direction"][first]], refine_max_deg)[0]
-        where["run"], where["last"] = run, first
-        return ok_start
-
-    def between(k, sun_in_world):
-        """Whether a Sun on a frame without evidence of its own, between
-        frames with evidence, is where the Sun can be from both of them: the
-        path carries such frames on a grid cell that lags the Sun, so the
-        tracker's own Sun is checked against the measured frames instead."""
-        for j in (before[k], after[k]):
-            d = directions[path["direction"][j]]
-            if _angle_deg(sun_in_world, d) > refine_max_deg + motion_deg(k, j):
-                return False
+    def solve_path(self) -> bool:
+        """The Sun's path chosen globally over the sky's evidence."""
+        solved = self.native.solve_sun_path(self.sky, self.times_list(), self.starts,
+                                            self.path_options)
+        if not _solved(solved):
+            self.result.frames = [
+                RawFrame(f, reason=solved["message"] or self.done.reason(k) or "no evidence")
+                for k, f in enumerate(self.frames)]
+            self.result.message = solved["message"]
+            return False
+        self.path = _path_from(solved)
+        self.mark("path")
         return True
 
-    def refine(k, raw, run, first, beyond, anchor, step):
+    def choose_again_under_circle_prior(self) -> None:
+        """Where the path strayed from its segments' Sun circles, the path
+        chosen again with the circle as a prior (PRIOR_* above)."""
+        prior = None if self.fit_circle is None else _circle_prior(
+            self.fit_circle, self.path, self.directions, self.times_s, self.n, self.spacing_deg)
+        self.path_prior = prior is not None
+        self.mark("prior")
+        if prior is not None:
+            again = self.native.solve_sun_path(self.sky, self.times_list(), self.starts,
+                                               self.path_options, prior)
+            if _solved(again):
+                path = _path_from(again)
+                path.path_margin = _evidence_support(self.path, path, self.directions,
+                                                     self.spacing_deg)
+                self.path = path
+        self.mark("path_again")
+
+    def release_sky(self) -> None:
+        """The sky's table and every frame's kept costs (3 kB a frame) are
+        done with: the check needs the path only."""
+        self.sky_sizes = {"samples": self.sky.num_samples,
+                          "band_entries": self.sky.band_entries}
+        del self.sky
+
+    def segments_and_evidence(self) -> None:
+        """The path's segments, its unexplained jumps, the per-frame
+        evidence figures and the best-supported frame."""
+        path, frames, n = self.path, self.frames, self.n
+        self.bounds = [0]
+        for k in range(1, n):
+            if path.jump_before[k]:
+                self.bounds.append(k)
+                if not self.starts[k]:
+                    self.result.jumps.append(frames[k])
+        self.bounds.append(n)
+        d = self.directions
+        self.result.evidence = {
+            "explained": [round(v, 3) for v in path.explained],
+            "margin": [round(v, 2) for v in path.margin],
+            "significance": [round(v, 1) for v in path.significance],
+            "path_margin": [round(v, 1) for v in path.path_margin],
+            "path_sun_in_world": [[round(v, 5) for v in d[k]] for k in path.direction]}
+        best = max(range(n), key=lambda k: (path.measured[k], path.margin[k]))
+        self.result.anchor = frames[best] if path.measured[best] else None
+
+    def check_segments(self) -> None:
+        """Each segment against the path, forward from its first measured
+        frame, then back from it to the frames before. A frame the pass
+        tracked to a Sun near the path keeps it; the others are read again
+        and refined around the path's direction by the pass's tracker (or,
+        where it never started, one started on the segment's first measured
+        frame)."""
+        measured, frames = self.path.measured, self.frames
+        self.before, self.after = [0] * self.n, [0] * self.n  # nearest measured frames
+        self.tracker_run: Optional[Tuple[int, int]] = None  # (segment, direction) followed
+        self.tracker_last: Optional[int] = None             # the tracker's last frame
+        for s in range(len(self.bounds) - 1):
+            lo, hi = self.bounds[s], self.bounds[s + 1]
+            self.result.segments.append(frames[lo:hi])
+            seg = [RawFrame(frames[k], segment=s, measured=measured[k]) for k in range(lo, hi)]
+            self.result.frames.extend(seg)
+            for k in range(lo, hi):
+                seg[k - lo].reason = (
+                    "no shadow evidence on this frame or around it in its segment"
+                    if self.usable[k] else self.done.reason(k) or "no evidence on this frame")
+            first = next((k for k in range(lo, hi) if measured[k]), None)
+            last = next((k for k in range(hi - 1, lo - 1, -1) if measured[k]), None)
+            if first is None or last is None:
+                continue
+            for k in range(first, last + 1):
+                self.before[k] = k if measured[k] else self.before[k - 1]
+            for k in range(last, first - 1, -1):
+                self.after[k] = k if measured[k] else self.after[k + 1]
+            for order in (range(first, hi), range(first - 1, lo - 1, -1)):
+                follow = True
+                for k in order:
+                    if not self.usable[k]:
+                        continue
+                    beyond = not first <= k <= last
+                    if beyond and not follow:
+                        continue  # lost past the evidence: nothing to carry
+                    follow = self.refine(k, seg[k - lo], (s, order.step), first, beyond,
+                                         last if k > last else first, order.step)
+        self.mark("checked")
+
+    def doubt_off_circle(self) -> None:
+        """Each segment's Sun circle (doubt_off_circle), on its frames in
+        frame order, as they are smoothed."""
+        for r in self.result.frames:
+            r.on_circle = r.confidence
+        if self.fit_circle is None:
+            return
+        seconds = self.times_s
+        for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
+            at = {f: k for k, f in enumerate(self.frames[lo:hi], start=lo)}
+            seg = sorted(self.result.frames[lo:hi], key=lambda r: r.frame)
+            t = [float(r.frame) if seconds is None else seconds[at[r.frame]] for r in seg]
+            doubt_off_circle(seg, t, seconds is not None, self.fit_circle)
+
+    # -- the check's parts -----------------------------------------------
+
+    def refine(self, k: int, raw: RawFrame, run: Tuple[int, int], first: int, beyond: bool,
+               anchor: int, step: int) -> bool:
         """Refines frame k into `raw`; returns whether the tracker holds.
         Beyond the measured frames the path has no evidence of its own: the
         result is checked against the nearest measured frame's Sun, as far
         as the Sun can move from it."""
-        clock["done"] += 1
-        tick(0.8 + 0.2 * clock["done"] / n)
-        d = directions[path["direction"][anchor if beyond else k]]
-        limit = refine_max_deg + (motion_deg(k, anchor) if beyond else 0.0)
-        refined = done.track(k)
-        if refined is not None and not measured[k] and not beyond:
-            if _angle_deg(refined.sun_in_world, d) > limit and not between(
-                    k, refined.sun_in_world):
-                refined = None
-        elif refined is not None and _angle_deg(refined.sun_in_world, d) > (
-                AGREE_DEG if measured[k] else limit):
-            refined = None
-        if refined is None and restart(run, first):
-            gray = read_again(k)
-            # The tracker's own prediction (the last refined Suns' motion) is
-            # finer than the path's grid cell, when it has just followed the
-            # neighbouring frame; the path's direction is the check, and the
-            # fallback when the tracker has drifted.
-            own = where["last"] == k - step
-            for attempt in ("own", "path") if own else ("path",):
-                if gray is None:
-                    break
-                r = tracker.track(gray) if attempt == "own" else tracker.track_toward(gray, d)
-                clock["tracking"] += r.seconds
-                where["last"] = k
-                if r.ok and _angle_deg(r.sun_in_world, d) <= limit:
-                    refined = r
-                    break
-        support = max(0.0, min(1.0, path["path_margin"][k] / FULL_CONFIDENCE_MARGIN))
+        path = self.path
+        self.checked += 1
+        self.tick(0.8 + 0.2 * self.checked / self.n)
+        d = self.directions[path.direction[anchor if beyond else k]]
+        limit = self.refine_max_deg + (self.motion_deg(k, anchor) if beyond else 0.0)
+        refined = self.passed_track(k, d, limit, beyond)
+        if refined is None and self.restart(run, first):
+            refined = self.track_again(k, d, limit, step)
+        support = max(0.0, min(1.0, path.path_margin[k] / FULL_CONFIDENCE_MARGIN))
+        measured = path.measured[k]
         if refined is not None:
             raw.sun_in_world = np.asarray(refined.sun_in_world, dtype=float)
             raw.refined, raw.tracked, raw.reason = True, refined, None
-            if measured[k]:
+            if measured:
                 raw.confidence = refined.confidence * support
                 if _angle_deg(refined.sun_in_world, d) > AGREE_DEG:
                     raw.confidence *= 0.5
@@ -478,155 +576,231 @@ def estimate(native, scene, camera, frames: Sequence[int],
             raw.reason = "shadow lost beyond the frames with shadow evidence"
         else:
             raw.sun_in_world = np.asarray(d, dtype=float)
-            raw.confidence = (0.5 * support) if measured[k] else CARRIED_CONFIDENCE
+            raw.confidence = (0.5 * support) if measured else CARRIED_CONFIDENCE
         return refined is not None
 
-    for s in range(len(bounds) - 1):
-        lo, hi = bounds[s], bounds[s + 1]
-        result.segments.append(frames[lo:hi])
-        seg = [RawFrame(frames[k], segment=s, measured=bool(measured[k])) for k in range(lo, hi)]
-        raws.extend(seg)
-        usable = usable_frames[lo:hi]
-        for k in range(lo, hi):
-            if not usable[k - lo]:
-                seg[k - lo].reason = done.reason(k) or "no evidence on this frame"
-            else:
-                seg[k - lo].reason = "no shadow evidence on this frame or around it in its segment"
-        first = next((k for k in range(lo, hi) if measured[k]), None)
-        last = next((k for k in range(hi - 1, lo - 1, -1) if measured[k]), None)
-        if first is None or last is None:
+    def passed_track(self, k: int, d, limit: float, beyond: bool):
+        """The pass's own tracked Sun on frame k, if it is where the path
+        (or, between measured frames, the frames around) allows."""
+        refined = self.done.track(k)
+        if refined is None:
+            return None
+        off = _angle_deg(refined.sun_in_world, d)
+        if not self.path.measured[k] and not beyond:
+            return refined if off <= limit or self.between(k, refined.sun_in_world) else None
+        return refined if off <= (AGREE_DEG if self.path.measured[k] else limit) else None
+
+    def track_again(self, k: int, d, limit: float, step: int):
+        """Frame k read again and tracked: the tracker's own prediction (the
+        last refined Suns' motion) is finer than the path's grid cell when it
+        has just followed the neighbouring frame; the path's direction is the
+        check, and the fallback when the tracker has drifted."""
+        gray = self.read_again(k)
+        own = self.tracker_last == k - step
+        for attempt in ("own", "path") if own else ("path",):
+            if gray is None:
+                break
+            r = self.tracker.track(gray) if attempt == "own" else \
+                self.tracker.track_toward(gray, d)
+            self.tracking_s += r.seconds
+            self.tracker_last = k
+            if r.ok and _angle_deg(r.sun_in_world, d) <= limit:
+                return r
+        return None
+
+    def restart(self, run: Tuple[int, int], first: int) -> bool:
+        """A tracker for the frames read again: the pass's own, or, when it
+        never started there, one started on frame `first` under the path's
+        Sun, once per run (segment, direction)."""
+        if self.tracker_run == run or self.done.tracker_started:
+            self.tracker_run = run
+            return True
+        gray = self.read_again(first)
+        ok_start = gray is not None and self.native.start_tracker(
+            self.tracker, gray, self.directions[self.path.direction[first]],
+            self.refine_max_deg)[0]
+        self.tracker_run, self.tracker_last = run, first
+        return ok_start
+
+    def between(self, k: int, sun_in_world) -> bool:
+        """Whether a Sun on a frame without evidence of its own, between
+        frames with evidence, is where the Sun can be from both of them: the
+        path carries such frames on a grid cell that lags the Sun, so the
+        tracker's own Sun is checked against the measured frames instead."""
+        for j in (self.before[k], self.after[k]):
+            d = self.directions[self.path.direction[j]]
+            if _angle_deg(sun_in_world, d) > self.refine_max_deg + self.motion_deg(k, j):
+                return False
+        return True
+
+    # -- small helpers -----------------------------------------------------
+
+    def read_again(self, k: int) -> Optional[np.ndarray]:
+        """Frame k at the working size: as the pass kept it (the check was
+        likely to want it), else read again."""
+        gray = self.done.take_kept(k)
+        if gray is not None:
+            return gray
+        self.frames_read += 1
+        return _frame(self.reduced(self.read_gray(self.frames[k])))
+
+    def reduced(self, image: Gray) -> Gray:
+        """A frame read by read_gray at the working size."""
+        gray = _frame(image)
+        if gray is None or gray.shape == (self.work.height, self.work.width):
+            return image
+        return self.native.resized_gray(gray, self.work.width, self.work.height)
+
+    def motion_deg(self, k: int, j: int) -> float:
+        return motion.sun_motion_bound_deg(k, j, self.times_s, self.path_options)
+
+    def times_list(self) -> List[float]:
+        return [] if self.times_s is None else list(self.times_s)
+
+    def tick(self, fraction: float) -> None:
+        if self.progress is not None and self.progress(fraction) is False:
+            raise Cancelled("cancelled")
+
+    def mark(self, step: str) -> None:
+        self.clock[step] = time.perf_counter() - self.t0
+
+    def timing(self) -> dict:
+        c, n = self.clock, self.n
+        return {"table_s": c["table"], "reference_s": c["reference"] - c["table"],
+                "evidence_ms_per_frame": 1000.0 * (c["evidence"] - c["reference"]) / max(1, n),
+                "tracking_ms_per_frame": 1000.0 * self.tracking_s / max(1, n),
+                "tracker_start_s": self.done.start_seconds,
+                "path_s": c["path"] - c["evidence"], "prior_s": c["prior"] - c["path"],
+                "path_again_s": c["path_again"] - c["prior"], "path_prior": self.path_prior,
+                "check_s": c["checked"] - c["path_again"],
+                "frames_read": self.frames_read, "frames": n,
+                "total_s": time.perf_counter() - self.t0, **self.sky_sizes,
+                "directions": len(self.directions), "spacing_deg": self.spacing_deg}
+
+
+def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_seconds: bool,
+                     fit_circle: Callable[..., Any]) -> None:
+    """A segment's Sun circle about the pole, fitted (trimmed) to its
+    confident raw Suns (t: their times, seconds or frame numbers), kept with
+    each of its frames; a frame whose Sun is off it by more than
+    CIRCLE_DOUBT_DEG keeps less confidence (on_circle), with the square of
+    the ratio."""
+    suns = [r.sun_in_world if r.sun_in_world is not None and r.confidence >= 0.3 else None
+            for r in segment]
+    fit = fit_circle(list(t), suns, CIRCLE_INLIER_FLOOR_DEG,
+                     [max(r.confidence, 1e-3) for r in segment],
+                     times_are_seconds=times_are_seconds)
+    if not fit.success:
+        return
+    for i, r in enumerate(segment):
+        r.circle_in_world = np.asarray(fit.sun_in_world[i], dtype=float)
+        r.on_circle = r.confidence
+        if r.sun_in_world is None:
             continue
-        for k in range(first, last + 1):
-            before[k] = k if measured[k] else before[k - 1]
-        for k in range(last, first - 1, -1):
-            after[k] = k if measured[k] else after[k + 1]
-        for order in (range(first, hi), range(first - 1, lo - 1, -1)):
-            follow = True
-            for k in order:
-                if not usable[k - lo]:
-                    continue
-                beyond = not first <= k <= last
-                if beyond and not follow:
-                    continue  # lost past the evidence: nothing to carry
-                follow = refine(k, seg[k - lo], (s, order.step), first, beyond,
-                                last if k > last else first, order.step)
-    t_checked = time.perf_counter() - t0
-    result.frames = raws
-    t_end = time.perf_counter() - t0
-    result.timing = {"table_s": t_table, "reference_s": t_setup - t_table,
-                     "evidence_ms_per_frame": 1000.0 * (t_evidence - t_setup) / max(1, n),
-                     "tracking_ms_per_frame": 1000.0 * clock["tracking"] / max(1, n),
-                     "tracker_start_s": clock["start"],
-                     "path_s": t_path - t_evidence, "prior_s": t_prior - t_path,
-                     "path_again_s": t_solved - t_prior, "path_prior": prior is not None,
-                     "check_s": t_checked - t_solved,
-                     "frames_read": reads["count"], "frames": n,
-                     "total_s": t_end, **sky_sizes,
-                     "directions": len(directions), "spacing_deg": spacing}
-    return result
+        off = _angle_deg(r.sun_in_world, r.circle_in_world)
+        if off > CIRCLE_DOUBT_DEG:
+            r.on_circle = r.confidence * (CIRCLE_DOUBT_DEG / off) ** 2
 
 
-def run(scene, camera, clip_path, source, frames, visit, times, options, track, progress, t0):
-    """The default method: the Sun over the whole clip at once
-    (estimate/whole_clip.py), then smoothing per segment."""
-    native = native_loader.require()
-    north = options.north_offset_deg
-    # The frames spread over the clip for the reference levels are kept in
-    # colour, at the unmodelled-shadow note's size, for the clip's shadow-free
-    # background.
-    samples = {}
-    stride = notes.note_stride(camera)
+class _ClipReads:
+    """The clip's frames as the whole-clip estimate asks for them: the
+    reference frames and the pass streamed by native readers, the few
+    frames read again one at a time. The reference frames also come in
+    colour, at the unmodelled-shadow note's size, for the clip's
+    shadow-free background (`samples`)."""
 
-    def read_gray(f):
+    def __init__(self, native, clip_path: str, source, camera, gamma: float):
+        self.native, self.clip_path, self.source = native, clip_path, source
+        self.camera, self.gamma = camera, gamma
+        self.stride = notes.note_stride(camera)
+        self.samples: Dict[int, np.ndarray] = {}
+        self.pass_stream: Any = None
+        # The frames stream reduced to the estimate's working size: a clip
+        # of another size than the camera's would be reduced to it silently.
+        clip_frames.check_clip_size(source.reader.width, source.reader.height, camera)
+
+    def read_gray(self, f: int) -> Gray:
         try:
-            bgr = source.read(f)
+            bgr = self.source.read(f)
         except StopIteration:
             return "the clip ended before this frame"
         if bgr is None:
-            return source.why_not()
-        return (clip_frames.wrong_size(bgr, camera)
-                or native.to_linear_gray(bgr, GAMMA[options.method]))
+            return self.source.why_not()
+        return (clip_frames.wrong_size(bgr, self.camera)
+                or self.native.to_linear_gray(bgr, self.gamma))
 
-    # The frames stream reduced to the estimate's working size: a clip of
-    # another size than the camera's would be reduced to it silently.
-    clip_frames.check_clip_size(source.reader.width, source.reader.height, camera)
-
-    def open_stream(fs, near, size):
-        # The reference frames also come in colour for the note, at its size.
+    def open_stream(self, fs: Sequence[int], near: bool, size: Tuple[int, int]):
+        native, camera = self.native, self.camera
         try:
             return native.FrameStream(
-                clip_path, [f - source.start for f in fs],
-                native.FrameStreamOptions(gamma=GAMMA[options.method], near=near,
-                                          keep_bgr=near, width=size[0], height=size[1],
-                                          bgr_width=-(-camera.width // stride),
-                                          bgr_height=-(-camera.height // stride)))
+                self.clip_path, [f - self.source.start for f in fs],
+                native.FrameStreamOptions(gamma=self.gamma, near=near, keep_bgr=near,
+                                          width=size[0], height=size[1],
+                                          bgr_width=-(-camera.width // self.stride),
+                                          bgr_height=-(-camera.height // self.stride)))
         except ValueError as e:
             raise EstimateError(f"cannot read the clip: {e}")
 
-    def stream(fs, near, size):
+    def stream(self, fs: Sequence[int], near: bool, size: Tuple[int, int]):
         """The frames in order at `size`, decoded ahead on a native thread
         (started now, before the first is asked for)."""
-        return streamed(open_stream(fs, near, size), near)
+        return self.streamed(self.open_stream(fs, near, size), near)
 
-    def frame_source(fs, size):
+    def frame_source(self, fs: Sequence[int], size: Tuple[int, int]):
         """The pass's frames at `size`: a native stream, and the index it
         reports for each frame (its 0-based index in the clip)."""
-        pass_stream["stream"] = open_stream(fs, False, size)
-        return pass_stream["stream"], {f: f - source.start for f in fs}
+        self.pass_stream = self.open_stream(fs, False, size)
+        return self.pass_stream, {f: f - self.source.start for f in fs}
 
-    def streamed(frame_stream, near):
-        start = source.start
-        past_end = native.StreamedFrameStatus.past_end
+    def streamed(self, frame_stream, near: bool):
+        start = self.source.start
+        past_end = self.native.StreamedFrameStatus.past_end
         for got in frame_stream:
             f = got.index + start
             if got.gray is not None:
                 if near:
-                    samples[f] = got.bgr
+                    self.samples[f] = got.bgr
                 yield f, got.gray
             elif got.status == past_end:
                 yield f, "the clip ended before this frame"
             else:
                 yield f, got.message or "frame not decodable"
 
-    pass_stream = {"stream": None}
+    def wait_seconds(self) -> float:
+        return 0.0 if self.pass_stream is None else self.pass_stream.wait_seconds
 
+
+def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Sequence[int],
+        times, options, track: trackfile.Track, progress, t0: float) -> trackfile.Track:
+    """The default method: the Sun over the whole clip at once (estimate),
+    the unmodelled-shadow note on its best-supported frame, then smoothing
+    per segment (finish.py)."""
+    native = native_loader.require()
+    north = options.north_offset_deg
+    reads = _ClipReads(native, clip_path, source, camera, GAMMA[options.method])
     seconds = None
     if times is not None:
-        by_frame = dict(zip(frames, frametimes.seconds_since(times)))
-        seconds = [by_frame[f] for f in visit]
+        by_time = dict(zip(frames, frametimes.seconds_since(times)))
+        seconds = [by_time[f] for f in visit]
     result = estimate(
-        native, scene, camera, visit, read_gray, options.ground_object_ids, times_s=seconds,
+        native, scene, camera, visit, reads.read_gray, options.ground_object_ids, times_s=seconds,
         ignore_top_rows=options.ignore_top_rows,
         progress=None if progress is None else (lambda x: progress(0.95 * x)),
-        stream=stream, source=frame_source, fit_circle=trimmed_circle.fit_trimmed)
+        stream=reads.stream, source=reads.frame_source, fit_circle=trimmed_circle.fit_trimmed)
     track.method["initial"] = track.method["tracking"] = "whole_clip"
     by_frame = {r.frame: r for r in result.frames}
-    raws = []
-    geographic = {}  # frame -> (zenith, geographic azimuth)
-    for f in frames:
-        r = by_frame[f]
-        if r.sun_in_world is None:
-            raws.append((f, None, None, r.confidence, r.reason, r.tracked))
-            continue
-        z, a_world = angles.angles_from_sun_in_world(r.sun_in_world)
-        geographic[f] = (float(z), float(angles.azimuth_geographic_from_world(a_world, north)))
-        raws.append((f, *geographic[f], r.confidence, r.reason, r.tracked))
-    raws, circle = finish.doubt_off_circle(raws, result.segments, frames, times, north)
+    raws = [_raw_sun(by_frame[f], north) for f in frames]
+    circle = {k: _geographic(by_frame[f].circle_in_world, north) for k, f in enumerate(frames)
+              if by_frame[f].circle_in_world is not None}
     if result.anchor is not None:
         a = by_frame[result.anchor]
-        track.initial = {"frame": a.frame, "zenith_deg": geographic[a.frame][0],
-                         "azimuth_deg": geographic[a.frame][1],
+        z, az = _geographic(a.sun_in_world, north)
+        track.initial = {"frame": a.frame, "zenith_deg": z, "azimuth_deg": az,
                          "residual": None, "confidence": a.confidence,
                          "seconds": result.timing.get("table_s", 0.0)
                          + result.timing.get("reference_s", 0.0),
                          "message": "the best-supported frame of the whole-clip path"}
-        # Unmodelled shadows are looked for on the best-supported frame kept
-        # in colour (no frame is decoded again for the note).
-        kept = [f for f in samples if f in by_frame and by_frame[f].sun_in_world is not None]
-        if kept:
-            f = max(kept, key=lambda f: by_frame[f].confidence)
-            notes.note_unmodelled_shadows(track, scene, camera, f, samples[f],
-                                          by_frame[f].sun_in_world, list(samples.values()), options)
+        _note(track, scene, camera, reads.samples, by_frame, options)
     elif result.message:
         track.report("estimate", trackfile.ProblemKind.FAILED, result.message)
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
@@ -636,8 +810,29 @@ def run(scene, camera, clip_path, source, frames, visit, times, options, track, 
         track.extra["jumps"] = result.jumps
     finish.finish(native, track, raws, options, times, progress, result.segments,
                   result.tracker_pixel_scale, circle)
-    wait = 0.0 if pass_stream["stream"] is None else pass_stream["stream"].wait_seconds
-    pass_stream["stream"] = None
-    track.extra["timing"] = dict(result.timing, decode_wait_s=wait,
+    track.extra["timing"] = dict(result.timing, decode_wait_s=reads.wait_seconds(),
                                  total_s=time.perf_counter() - t0)
     return track
+
+
+def _geographic(sun_in_world, north: float) -> Tuple[float, float]:
+    """(zenith, geographic azimuth) of a direction toward the Sun."""
+    z, a_world = angles.angles_from_sun_in_world(sun_in_world)
+    return float(z), float(angles.azimuth_geographic_from_world(a_world, north))
+
+
+def _raw_sun(r: RawFrame, north: float) -> RawSun:
+    if r.sun_in_world is None:
+        return RawSun(r.frame, confidence=r.on_circle, reason=r.reason, tracked=r.tracked)
+    return RawSun(r.frame, *_geographic(r.sun_in_world, north), confidence=r.on_circle,
+                  reason=r.reason, tracked=r.tracked)
+
+
+def _note(track, scene, camera, samples, by_frame, options) -> None:
+    """Unmodelled shadows looked for on the best-supported frame kept in
+    colour (no frame is decoded again for the note)."""
+    kept = [f for f in samples if f in by_frame and by_frame[f].sun_in_world is not None]
+    if kept:
+        f = max(kept, key=lambda f: by_frame[f].confidence)
+        notes.note_unmodelled_shadows(track, scene, camera, f, samples[f],
+                                      by_frame[f].sun_in_world, list(samples.values()), options)

@@ -22,7 +22,9 @@ if "sunlapse" not in sys.modules:
 # would register its types twice.
 native = pytest.importorskip("_native")
 sys.modules.setdefault("sunlapse._native", native)
+from sunlapse.core import trimmed_circle  # noqa: E402
 from sunlapse.estimate import finish, options as estimate_options  # noqa: E402
+from sunlapse.estimate.raw import RawSun  # noqa: E402
 from sunlapse.core import angles  # noqa: E402
 from sunlapse.estimate import whole_clip  # noqa: E402
 
@@ -114,14 +116,18 @@ def run(world, frames_gray, times_s=None):
                                times_s=times_s)
 
 
+def raw_sun(r):
+    """The finishing's raw Sun of a whole-clip frame (north = +Y)."""
+    if r.sun_in_world is None:
+        return RawSun(r.frame, confidence=r.on_circle, reason=r.reason)
+    z, a = angles.angles_from_sun_in_world(r.sun_in_world)
+    return RawSun(r.frame, z, a, r.on_circle, r.reason)
+
+
 def smooth(result):
-    raws = []
-    for r in result.frames:
-        z, a = (None, None) if r.sun_in_world is None else angles.angles_from_sun_in_world(
-            r.sun_in_world)
-        raws.append((r.frame, z, a, r.confidence, r.reason, None))
+    raws = [raw_sun(r) for r in result.frames]
     opts = estimate_options.EstimateOptions()
-    return finish._smooth_segments([r[0] for r in raws], raws, result.segments, "two_pass",
+    return finish._smooth_segments([r.frame for r in raws], raws, result.segments, "two_pass",
                                    opts, None)
 
 
@@ -243,10 +249,23 @@ def frame_times(n):
     return [t0 + dt.timedelta(minutes=6 * k) for k in range(n)]
 
 
+def doubted(raws, times):
+    """Whole-clip frames for (frame, zenith, azimuth, confidence) after the
+    segment's circle doubted them; the finishing's raw Suns and the circle
+    ({index: (zenith, azimuth)}) as whole_clip.run hands them on."""
+    seg = [whole_clip.RawFrame(f, angles.sun_in_world_from_angles(z, a), c)
+           for f, z, a, c in raws]
+    seconds = [(t - times[0]).total_seconds() for t in times]
+    whole_clip.doubt_off_circle(seg, seconds, True, trimmed_circle.fit_trimmed)
+    circle = {k: tuple(float(v) for v in angles.angles_from_sun_in_world(r.circle_in_world))
+              for k, r in enumerate(seg) if r.circle_in_world is not None}
+    return seg, [raw_sun(r) for r in seg], circle
+
+
 def test_suns_off_their_circle_lose_confidence():
     """The Sun's path over a segment is a small circle about the pole: raw
     Suns far off the circle fitted to the segment lose their confidence, the
-    further the more (finish.doubt_off_circle); the others keep it."""
+    further the more (whole_clip.doubt_off_circle); the others keep it."""
     frames = list(range(1, 41))
     times = frame_times(40)
     off = {7: 8.0, 20: 6.0, 33: 10.0}
@@ -254,9 +273,9 @@ def test_suns_off_their_circle_lose_confidence():
     for k, f in enumerate(frames):
         z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
         z = float(z) + off.get(f, 0.0)
-        raws.append((f, z, float(a) % 360.0, 0.95, None, None))
-    out, _ = finish.doubt_off_circle(raws, [frames], frames, times, 0.0)
-    conf = {r[0]: r[3] for r in out}
+        raws.append((f, z, float(a) % 360.0, 0.95))
+    seg, _, _ = doubted(raws, times)
+    conf = {r.frame: r.on_circle for r in seg}
     for f in frames:
         if f in off:
             assert conf[f] < 0.4, f
@@ -277,11 +296,11 @@ def test_frames_past_the_confident_span_follow_the_circle_not_the_fit():
     for k, f in enumerate(frames):
         z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
         if k < confident:
-            raws.append((f, float(z), float(a) % 360.0, 0.95, None, None))
+            raws.append((f, float(z), float(a) % 360.0, 0.95))
         else:  # the tracker wanders off as the shadows fade
             raws.append((f, float(z) + 1.5 * (k - confident + 1), float(a) - 4.0 * (k - confident),
-                         0.01, None, None))
-    raws, circle = finish.doubt_off_circle(raws, [frames], frames, times, 0.0)
+                         0.01))
+    _, raws, circle = doubted(raws, times)
     opts = estimate_options.EstimateOptions()
     for along, worst in ((circle, 0.3), (None, None)):
         zs, azs = finish._smooth_segments(frames, raws, [frames], "two_pass", opts, times,
@@ -311,10 +330,10 @@ def test_a_doubted_run_is_carried_by_the_circle_and_the_confident_frames():
         z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
         z, a = float(z) + rng.normal(0, 0.3), float(a) + rng.normal(0, 0.3)
         if k < 10:
-            raws.append((f, z + 6.0 - 0.5 * k, a % 360.0, 0.05 + 0.04 * k, None, None))
+            raws.append((f, z + 6.0 - 0.5 * k, a % 360.0, 0.05 + 0.04 * k))
         else:
-            raws.append((f, z, a % 360.0, 0.85, None, None))
-    raws, circle = finish.doubt_off_circle(raws, [frames], frames, times, 0.0)
+            raws.append((f, z, a % 360.0, 0.85))
+    _, raws, circle = doubted(raws, times)
     assert circle
     opts = estimate_options.EstimateOptions()
     for along, worst in ((circle, 0.6), (None, None)):

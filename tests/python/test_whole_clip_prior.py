@@ -26,9 +26,9 @@ SPACING_DEG = 1.5
 
 def path_through(suns, measured=None):
     n = len(suns)
-    return {"jump_before": [False] * n, "direction": list(range(n)),
-            "measured": [True] * n if measured is None else measured,
-            "path_margin": [30.0] * n}
+    return whole_clip._Path(jump_before=[False] * n, direction=list(range(n)),
+                            measured=[True] * n if measured is None else measured,
+                            path_margin=[30.0] * n)
 
 
 @pytest.mark.parametrize("seed", [3, 102])
@@ -58,8 +58,8 @@ def test_support_after_the_prior_never_counts_the_prior():
     near = tuple(angles.sun_in_world_from_angles(2.0, 0.0))   # within 1.5 cells
     far = tuple(angles.sun_in_world_from_angles(20.0, 0.0))
     directions = [up, near, far]
-    first = {"direction": [0, 0, 0, -1], "path_margin": [5.0, 40.0, 40.0, 0.0]}
-    again = {"direction": [1, 1, 2, -1], "path_margin": [50.0, 20.0, 50.0, 3.0]}
+    first = whole_clip._Path(direction=[0, 0, 0, -1], path_margin=[5.0, 40.0, 40.0, 0.0])
+    again = whole_clip._Path(direction=[1, 1, 2, -1], path_margin=[50.0, 20.0, 50.0, 3.0])
     support = whole_clip._evidence_support(first, again, directions, SPACING_DEG)
     cap = whole_clip.FOLLOWED_CONFIDENCE * whole_clip.FULL_CONFIDENCE_MARGIN
     assert support == [5.0, 20.0, cap, 3.0]
