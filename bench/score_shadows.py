@@ -26,6 +26,7 @@ import run_estimate  # noqa: E402
 run_estimate.load_sunlapse()
 from sunlapse import bridge  # noqa: E402
 from sunlapse.estimate import frames as estimate_frames, notes  # noqa: E402
+from sunlapse.estimate import options as estimate_options  # noqa: E402
 from sunlapse.core import angles, trackfile  # noqa: E402
 
 
@@ -90,7 +91,8 @@ def main(track_path, truth_path):
                                                       track.north_offset_deg))
         f = bgr.get(int(frame))
         found = None if f is None else notes.detect_unmodelled_shadows(
-            scene, cam, ground_ids, f, d, [bgr[s] for s in samples])
+            scene, cam, ground_ids, f, d, [bgr[s] for s in samples],
+            estimate_options.gamma("default"))
         if found is None:
             ground, shadow = notes.ground_and_model_shadow(scene, cam, ground_ids, d)
         else:

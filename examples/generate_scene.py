@@ -52,7 +52,7 @@ import random_scene  # noqa: E402
 import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
-from sunlapse import native_loader  # noqa: E402
+from sunlapse.estimate import native_loader  # noqa: E402
 from sunlapse.core import trackfile  # noqa: E402
 
 SUN_ANGULAR_DIAMETER_DEG = 0.545

@@ -6,7 +6,7 @@ from typing import Optional
 
 from . import native_loader
 from .errors import EstimateError
-from .options import GAMMA
+from .options import gamma
 
 
 def open_clip(path: str, index: int):
@@ -73,7 +73,7 @@ def check_clip_size(width, height, camera):
 def gray(bgr, camera, method):
     native = native_loader.require()
     check_clip_size(bgr.shape[1], bgr.shape[0], camera)
-    return native.to_linear_gray(bgr, GAMMA[method])
+    return native.to_linear_gray(bgr, gamma(method))
 
 
 def wrong_size(image, camera) -> Optional[str]:

@@ -14,13 +14,13 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 from . import native_loader
-from .options import GAMMA
+from .options import gamma
 from ..core import trackfile
 
 BACKGROUND_SAMPLES = 24
 
 
-def linear_bgr(bgr: np.ndarray, gamma: float = 2.2) -> np.ndarray:
+def linear_bgr(bgr: np.ndarray, gamma: float) -> np.ndarray:
     """uint8 BGR -> float32 linear BGR in [0, 1]."""
     return np.power(bgr.astype(np.float32) / 255.0, gamma).astype(np.float32)
 
@@ -104,7 +104,7 @@ def note_stride(camera) -> int:
 
 
 def detect_unmodelled_shadows(scene, camera, ground_ids, bgr, sun_in_world, samples,
-                              gamma=2.2, top=0) -> Optional[dict]:
+                              gamma, top=0) -> Optional[dict]:
     """Hard ground shadows on one frame (uint8 BGR) that the model does not
     cast toward `sun_in_world`: native.detect_unmodelled_shadows against the
     clip's shadow-free background (the median of `samples`, uint8 BGR frames
@@ -146,7 +146,7 @@ def note_unmodelled_shadows(track, scene, camera, frame, bgr, sun_in_world, samp
     Advisory: a failure here only notes itself."""
     try:
         found = detect_unmodelled_shadows(scene, camera, options.ground_object_ids, bgr,
-                                          sun_in_world, samples, GAMMA[options.method],
+                                          sun_in_world, samples, gamma(options.method),
                                           options.ignore_top_rows)
     except (ValueError, RuntimeError, MemoryError) as e:
         track.extra["unmodelled_shadows"] = {"frame": frame, "error": str(e)}

@@ -8,7 +8,7 @@ from typing import Callable, Optional, Sequence
 
 from . import frames as clip_frames, native_loader, thesis, whole_clip
 from .errors import EstimateError
-from .options import GAMMA, EstimateOptions
+from .options import EstimateOptions, gamma
 from ..core import frametimes, trackfile
 
 
@@ -17,9 +17,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         ) -> trackfile.Track:
     """Estimates the Sun on `frames` (consecutive scene frame numbers)."""
     native_loader.require()
-    if not options.ground_object_ids:
-        raise EstimateError("no ground object: name the ground the shadows fall on "
-                            "(--ground, or Ground in the panel)")
+    options.check()
     frames = list(frames)
     times = None
     if options.frame_times is not None:
@@ -41,7 +39,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         frame_start=clip_frame_start, north_offset_deg=north,
         method={"initial": options.method, "tracking": options.method,
                 "smoothing": options.smoothing,
-                "options": {"gamma": GAMMA[options.method]}})
+                "options": {"gamma": gamma(options.method)}})
     if times is not None:
         late = frametimes.out_of_order(frames, times)
         track.extra["frame_times"] = {"first_utc": min(times).isoformat(),

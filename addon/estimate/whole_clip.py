@@ -40,7 +40,7 @@ import numpy as np
 
 from . import finish, frames as clip_frames, motion, native_loader, notes
 from .errors import Cancelled, EstimateError
-from .options import GAMMA
+from .options import gamma
 from .raw import RawSun
 from ..core import angles, frametimes, trackfile, trimmed_circle
 
@@ -777,7 +777,7 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     per segment (finish.py)."""
     native = native_loader.require()
     north = options.north_offset_deg
-    reads = _ClipReads(native, clip_path, source, camera, GAMMA[options.method])
+    reads = _ClipReads(native, clip_path, source, camera, gamma(options.method))
     seconds = None
     if times is not None:
         by_time = dict(zip(frames, frametimes.seconds_since(times)))
