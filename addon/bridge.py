@@ -337,25 +337,13 @@ def gather_clip(context, movieclip=None) -> ClipInfo:
 
 def sequence_gaps(first_path: str, limit: int = 100000) -> List[str]:
     """Files missing inside a numbered image sequence (frame_0001.png ...):
-    names between the first file and the highest-numbered one present."""
-    import re
-    folder, name = os.path.split(first_path)
-    m = re.match(r"^(.*?)(\d+)(\.[A-Za-z0-9]+)$", name)
-    if not m:
+    names between the first file and the highest-numbered one present (the
+    native reader's own reading of the names)."""
+    sequence = native_loader.require().find_image_sequence(first_path)
+    if sequence is None:
         return []
-    prefix, digits, suffix = m.group(1), m.group(2), m.group(3)
-    pattern = re.compile(re.escape(prefix) + r"(\d+)" + re.escape(suffix) + "$")
-    try:
-        present = {int(p.group(1)) for p in map(pattern.match, os.listdir(folder or "."))
-                   if p and len(p.group(1)) == len(digits)}
-    except OSError:
-        return []
-    first = int(digits)
-    present = {k for k in present if first <= k < first + limit}
-    if not present:
-        return []
-    return [f"{prefix}{k:0{len(digits)}d}{suffix}" for k in range(first, max(present) + 1)
-            if k not in present]
+    paths = (sequence.path(k) for k in range(min(sequence.num_frames, limit)))
+    return [os.path.basename(p) for p in paths if not os.path.exists(p)]
 
 
 def probe_clip(info: ClipInfo) -> None:

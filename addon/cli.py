@@ -224,7 +224,7 @@ def physical_inputs(args, context, options):
     frames' times known (a times file) only the place is needed; with no
     place at all, the Sun's circle about the pole is fitted instead."""
     import datetime as dt
-    from .core import frametimes
+    from .core import clock
     sp = getattr(context.scene, "sun_pos_properties", None)
 
     def pick(flag, from_options, from_sun_position):
@@ -265,8 +265,8 @@ def physical_inputs(args, context, options):
             else:
                 hours = getattr(sp, "time", None)
             if day is not None and hours is not None:
-                first = frametimes.local_start(day, hours, utc)
-    except (ValueError, OverflowError) as e:
+                first = clock.local_start(day, hours, clock.zone("", utc))
+    except (ValueError, OverflowError) as e:  # clock.ClockError too
         fail(EXIT_USAGE, f"bad --date or --start-time: {e}")
     seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds
     missing = [name for name, v in (("--latitude", lat), ("--longitude", lon),

@@ -11,7 +11,7 @@ from bpy_extras.io_utils import ExportHelper
 from . import ar, bridge, lamp, results
 from .estimate import errors, frames as clip_frames, native_loader, thesis
 from .estimate import options as estimate_options, run as estimate_run
-from .core import exif, frametimes, trackfile
+from .core import clock, exif, frametimes, trackfile
 
 
 def ground_names(settings, model=None):
@@ -132,8 +132,8 @@ def settings_zone(settings):
     """The panel's time zone (IANA name, else the UTC offset) as a tzinfo;
     raises bridge.SceneError for an unknown name."""
     try:
-        return exif.zone(settings.time_zone, settings.utc_offset)
-    except exif.ExifError as e:
+        return clock.zone(settings.time_zone, settings.utc_offset)
+    except clock.ClockError as e:
         raise bridge.SceneError(str(e))
 
 
@@ -143,16 +143,10 @@ def load_frame_times(path, utc_offset_hours, clip, frames, tz=None):
     With `tz` (a zone with daylight saving), local times are read in it on
     their own date; times with their own offset or in UTC are kept."""
     try:
-        table = frametimes.read_times(path, utc_offset_hours)
-        if tz is not None:
-            # Local rows move with the offset they are read in; rows with
-            # their own offset (or UTC) do not: read at two offsets to tell.
-            a, b = frametimes.read_times(path, 0.0), frametimes.read_times(path, 1.0)
-            table = {k: (a[k].replace(tzinfo=None).replace(tzinfo=tz).astimezone(
-                dt.timezone.utc) if a[k] != b[k] else a[k]) for k in a}
+        table = frametimes.read_times(path, tz or clock.zone("", utc_offset_hours))
         clip_frames = [f - clip.frame_start + 1 for f in range(frames[0], frames[1] + 1)]
         times = frametimes.times_for(table, clip_frames, path)
-    except frametimes.FrameTimesError as e:
+    except (frametimes.FrameTimesError, clock.ClockError) as e:
         raise bridge.SceneError(str(e))
     return {f: t for f, t in zip(range(frames[0], frames[1] + 1), times)}
 
@@ -161,8 +155,12 @@ def exif_times(clip, frames, tz):
     """({scene frame: UTC time} or None, (lat, lon) or None) from the EXIF
     data of an image sequence's frames; raises bridge.SceneError for a
     file whose time cannot be read."""
+    sequence = native_loader.require().find_image_sequence(clip.filepath)
+    if sequence is None:
+        return None, None
+    paths = [sequence.path(k) for k in range(min(sequence.num_frames, clip.frame_duration))]
     try:
-        captures = exif.read_sequence(clip.filepath, tz, count=clip.frame_duration)
+        captures = exif.read_sequence(paths, tz)
     except exif.ExifError as e:
         raise bridge.SceneError(f"EXIF times: {e}")
     table = exif.times_by_frame(captures, clip.frame_start)
@@ -249,14 +247,14 @@ def physical_from_settings(context, settings, options):
         day = dt.date(sp.year, sp.month, sp.day)
         lat, lon, hours = sp.latitude, sp.longitude, sp.time
         dst = 1.0 if getattr(sp, "use_daylight_savings", False) else 0.0
-        tz = exif.zone("", sp.UTC_zone + dst)
+        tz = clock.zone("", sp.UTC_zone + dst)
     options.fit_latitude = settings.fit_latitude
     if options.frame_times is not None:  # the times file is the clock
         options.latitude_deg, options.longitude_deg = lat, lon
         return
     if day is None or settings.frame_seconds <= 0:
         return
-    options.first_time = exif.local_start(day, hours, tz)
+    options.first_time = clock.local_start(day, hours, tz)
     options.frame_seconds = settings.frame_seconds
     options.latitude_deg, options.longitude_deg = lat, lon
 
@@ -580,7 +578,7 @@ def frame_time_utc(settings, track, frame):
     except ValueError:
         return None
     first = track.frames[0].frame if track is not None and track.frames else frame
-    start = exif.local_start(day, settings.start_hour, settings_zone(settings))
+    start = clock.local_start(day, settings.start_hour, settings_zone(settings))
     return (start + dt.timedelta(seconds=settings.frame_seconds * (frame - first))).astimezone(
         dt.timezone.utc)
 
@@ -639,7 +637,7 @@ class CLIP_OT_sunlapse_to_sun_position(bpy.types.Operator):
                 when += dt.timedelta(seconds=fit["time_offset_s"])
             local = when.astimezone(tz)
             sp.use_daylight_savings = False  # the zone's offset already includes it
-            sp.UTC_zone = exif.utc_offset_hours(tz, when)
+            sp.UTC_zone = clock.utc_offset_hours(tz, when)
             sp.year, sp.month, sp.day = local.year, local.month, local.day
             sp.time = (local.hour + local.minute / 60
                        + (local.second + local.microsecond * 1e-6) / 3600)

@@ -14,7 +14,7 @@ import datetime as dt
 import os
 import re
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence
+from typing import List, Optional, Sequence
 
 EXIF_IFD = 0x8769
 GPS_IFD = 0x8825
@@ -36,63 +36,6 @@ class Capture:
     latitude_deg: Optional[float] = None   # north positive
     longitude_deg: Optional[float] = None  # east positive
     zone_from_file: bool = False          # OffsetTimeOriginal was present
-
-
-def zone(name: str = "", utc_offset_hours: float = 0.0) -> dt.tzinfo:
-    """The IANA zone `name`, or the fixed offset when `name` is empty;
-    ExifError names an unknown zone."""
-    if name:
-        try:
-            from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
-        except ImportError:  # Python < 3.9
-            raise ExifError("time zones by name need Python 3.9 or later (zoneinfo)")
-        try:
-            return ZoneInfo(name.strip())
-        except (ZoneInfoNotFoundError, ValueError):
-            raise ExifError(f"Time Zone '{name}' is not a known zone (an IANA name such as "
-                            f"Europe/Paris or America/New_York)")
-    return dt.timezone(dt.timedelta(hours=utc_offset_hours))
-
-
-def utc_offset_hours(tz: dt.tzinfo, when: dt.datetime) -> float:
-    """The zone's offset from UTC at `when` (daylight saving included), hours."""
-    local = when.astimezone(tz) if when.tzinfo else when.replace(tzinfo=tz)
-    offset = local.utcoffset()
-    if offset is None:
-        raise ExifError(f"time zone {tz!r} gives no UTC offset")
-    return offset.total_seconds() / 3600.0
-
-
-def local_start(day: dt.date, hours: float, tz: dt.tzinfo) -> dt.datetime:
-    """`hours` of wall-clock time after midnight of `day` in `tz` (the DST of
-    that day), aware."""
-    wall = dt.datetime(day.year, day.month, day.day) + dt.timedelta(hours=hours)
-    return wall.replace(tzinfo=tz)
-
-
-_NUMBERED = re.compile(r"^(.*?)(\d+)(\.[^.]+)$")
-
-
-def sequence_files(first_path: str, count: Optional[int] = None) -> List[str]:
-    """The files of the image sequence that starts at `first_path`, in frame
-    order: same name apart from the number, numbers consecutive from the
-    first one's (as Blender reads a sequence)."""
-    folder, name = os.path.split(first_path)
-    m = _NUMBERED.match(name)
-    if m is None:
-        raise ExifError(f"{first_path}: not a numbered image of a sequence")
-    prefix, digits, ext = m.groups()
-    numbers: Dict[int, str] = {}
-    for other in os.listdir(folder or "."):
-        o = _NUMBERED.match(other)
-        if o and o.group(1) == prefix and o.group(3).lower() == ext.lower():
-            numbers.setdefault(int(o.group(2)), other)
-    out: List[str] = []
-    n = int(digits)
-    while n in numbers and (count is None or len(out) < count):
-        out.append(os.path.join(folder, numbers[n]))
-        n += 1
-    return out
 
 
 def _rational(v) -> float:
@@ -159,9 +102,16 @@ def read_capture(path: str, tz: dt.tzinfo) -> Capture:
     return Capture(path, when, lat, lon, zone_from_file=own is not None)
 
 
-def read_sequence(first_path: str, tz: dt.tzinfo, count: Optional[int] = None) -> List[Capture]:
-    """Captures of the sequence's files in frame order."""
-    return [read_capture(p, tz) for p in sequence_files(first_path, count)]
+def read_sequence(paths: Sequence[str], tz: dt.tzinfo) -> List[Capture]:
+    """Captures of a sequence's files in frame order (the names come from
+    the one parser of sequence names, native find_image_sequence), up to
+    the first file missing: a frame past a gap has no time of its own."""
+    out = []
+    for p in paths:
+        if not os.path.isfile(p):
+            break
+        out.append(read_capture(p, tz))
+    return out
 
 
 def times_by_frame(captures: Sequence[Capture], first_frame: int) -> Optional[dict]:

@@ -15,7 +15,7 @@ the clip's own numbering, not the scene's); the time column (named
 (the UTC offset is given separately) or ISO 8601 with its own offset
 (`2005-03-21T08:06:00+01:00`). `utc_time` columns are read as UTC.
 
-The pipeline uses the times to visit frames in the order they were taken,
+The estimate uses the times to visit frames in the order they were taken,
 to smooth over real time instead of frame numbers and, for physical
 smoothing, as the clock of each frame. bpy-free.
 """
@@ -25,31 +25,15 @@ from __future__ import annotations
 import csv
 import datetime as dt
 import io
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Sequence
+
+from . import clock
 
 TIME_COLUMNS = ("local_time", "time", "utc_time")
 
 
 class FrameTimesError(ValueError):
     """A times file that cannot be used: says which file, line and why."""
-
-
-def parse_time(text: str, tz: dt.tzinfo) -> dt.datetime:
-    """An aware datetime from 'YYYY-MM-DD HH:MM[:SS]' (in `tz`) or ISO 8601
-    with an offset (kept)."""
-    text = text.strip()
-    try:
-        t = dt.datetime.fromisoformat(text.replace(" ", "T", 1) if "T" not in text else text)
-    except (ValueError, OverflowError):
-        raise ValueError(f"'{text}' is not a date and time (YYYY-MM-DD HH:MM[:SS])")
-    return t if t.tzinfo is not None else t.replace(tzinfo=tz)
-
-
-def local_start(day: dt.date, hours: float, utc_offset_hours: float) -> dt.datetime:
-    """The aware datetime `hours` after midnight of `day` in the zone
-    UTC+utc_offset_hours (a panel's or the flags' date, start time and zone)."""
-    tz = dt.timezone(dt.timedelta(hours=utc_offset_hours))
-    return dt.datetime(day.year, day.month, day.day, tzinfo=tz) + dt.timedelta(hours=hours)
 
 
 def _decode(data: bytes, path: str) -> str:
@@ -73,16 +57,11 @@ def _decode(data: bytes, path: str) -> str:
 MAX_BYTES = 64 * 1024 * 1024
 
 
-def read_times(path: str, utc_offset_hours: float = 0.0) -> Dict[int, dt.datetime]:
-    """{clip frame number: aware UTC datetime} from a times CSV. Raises
+def read_times(path: str, tz_local: dt.tzinfo = dt.timezone.utc) -> Dict[int, dt.datetime]:
+    """{clip frame number: aware UTC datetime} from a times CSV whose local
+    times are wall-clock times in `tz_local` (clock.zone: a fixed offset, or
+    a named zone whose daylight saving each row's own date decides). Raises
     FrameTimesError (only) naming the file, the line and what is valid."""
-    try:
-        if not -14.0 <= float(utc_offset_hours) <= 14.0:
-            raise ValueError
-        tz_local = dt.timezone(dt.timedelta(hours=float(utc_offset_hours)))
-    except (TypeError, ValueError, OverflowError):
-        raise FrameTimesError(f"UTC offset {utc_offset_hours} is not a number of hours "
-                              f"in [-14, 14]")
     try:
         with open(path, "rb") as fh:
             data = fh.read(MAX_BYTES + 1)
@@ -122,7 +101,7 @@ def _parse(fh, path: str, tz_local: dt.tzinfo) -> Dict[int, dt.datetime]:
             if not frame_text.lstrip("+-").isdigit() or len(frame_text) > 9:
                 raise ValueError(f"frame '{frame_text[:20]}' is not a whole number")
             frame = int(frame_text)
-            when = parse_time(str(row[column] or "")[:64], tz)
+            when = clock.parse_time(str(row[column] or "")[:64], tz)
             utc = when.astimezone(dt.timezone.utc)
         except (ValueError, TypeError, OverflowError) as e:
             raise FrameTimesError(f"times file {path}, line {line}: {e}")
@@ -144,24 +123,3 @@ def times_for(table: Dict[int, dt.datetime], clip_frames: Sequence[int],
         shown = ", ".join(str(f) for f in missing[:5]) + (" ..." if len(missing) > 5 else "")
         raise FrameTimesError(f"{path} has no time for clip frame(s) {shown}")
     return [table[f] for f in clip_frames]
-
-
-def chronological(frames: Sequence[int], times: Optional[Sequence[dt.datetime]]) -> List[int]:
-    """Positions 0..n-1 of `frames` in the order they were taken (ties keep
-    the frame order); the frame order itself when the times are unknown."""
-    n = len(frames)
-    if times is None:
-        return list(range(n))
-    known: Sequence[dt.datetime] = times
-    return sorted(range(n), key=lambda i: (known[i], frames[i]))
-
-
-def seconds_since(times: Sequence[dt.datetime]) -> List[float]:
-    """Seconds of each time after the earliest."""
-    t0 = min(times)
-    return [(t - t0).total_seconds() for t in times]
-
-
-def out_of_order(frames: Sequence[int], times: Sequence[dt.datetime]) -> List[int]:
-    """Frames taken before the frame decoded just ahead of them."""
-    return [frames[i] for i in range(1, len(frames)) if times[i] < times[i - 1]]

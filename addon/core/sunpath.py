@@ -39,16 +39,6 @@ class PathFit:
     azimuth_deg: List[float] = field(default_factory=list)   # geographic
 
 
-def frame_times(first: dt.datetime, frame_seconds: float, frames: Sequence[int]):
-    """UTC time of each frame, the first of `frames` at `first` (aware)."""
-    if frame_seconds is None or not math.isfinite(frame_seconds) or frame_seconds <= 0:
-        # 0 s puts every frame at one instant: a fixed Sun, confidently wrong.
-        raise ValueError(f"seconds between frames must be a positive number, got {frame_seconds}")
-    f0 = frames[0]
-    return [(first + dt.timedelta(seconds=(f - f0) * frame_seconds)).astimezone(dt.timezone.utc)
-            for f in frames]
-
-
 def _wrap(a):
     return (np.asarray(a) + 180.0) % 360.0 - 180.0
 

@@ -13,7 +13,7 @@ from . import motion
 from .errors import check_progress
 from .options import SMOOTHING_SPACE, TWO_PASS_DEGREE, EstimateOptions
 from .raw import RawSun
-from ..core import angles, frametimes, smoothing, suncircle, sunpath, trackfile
+from ..core import angles, clock, smoothing, suncircle, sunpath, trackfile
 
 
 def _sun_circle(track, numbers, raws, options, north):
@@ -22,7 +22,7 @@ def _sun_circle(track, numbers, raws, options, north):
     latitude, declination and north the path implies. Same return as
     _physical."""
     if options.frame_times is not None:
-        seconds = frametimes.seconds_since([options.frame_times[f] for f in numbers])
+        seconds = clock.seconds_since([options.frame_times[f] for f in numbers])
         t, real = seconds, True
     elif options.frame_seconds:
         t, real = [f * options.frame_seconds for f in numbers], True
@@ -59,7 +59,7 @@ def _physical(native, track, numbers, raws, options, north):
                      "or the first frame's time and the seconds per frame); used two_pass")
         track.method["smoothing"] = "two_pass"
         return None, north
-    times = sunpath.frame_times(options.first_time, options.frame_seconds, numbers) \
+    times = clock.frame_times(options.first_time, options.frame_seconds, numbers) \
         if options.frame_times is None else [options.frame_times[f] for f in numbers]
 
     def sun(t, lat, lon):
@@ -152,7 +152,7 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None)
     extrapolated past them beyond the Sun's own motion, and no fit runs
     through a time jump. circle: as finish's."""
     index = {f: k for k, f in enumerate(numbers)}
-    seconds = None if times is None else frametimes.seconds_since(times)
+    seconds = None if times is None else clock.seconds_since(times)
     zs, azs = [None] * len(numbers), [None] * len(numbers)
     for seg in segments:
         ks = sorted(index[f] for f in seg)

@@ -9,7 +9,7 @@ from typing import Callable, Optional, Sequence
 from . import frames as clip_frames, native_loader, thesis, whole_clip
 from .errors import EstimateError
 from .options import EstimateOptions, gamma
-from ..core import frametimes, trackfile
+from ..core import clock, trackfile
 
 
 def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
@@ -30,7 +30,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     # Frames are visited in the order they were taken (decode order when the
     # times are unknown): the tracker follows the shadow between neighbours
     # in time, so an out-of-order frame is tracked where it belongs.
-    visit = [frames[i] for i in frametimes.chronological(frames, times)]
+    visit = [frames[i] for i in clock.chronological(frames, times)]
     first = visit[0] - clip_frame_start
     source = clip_frames.FrameSource(clip_frames.open_clip(clip_path, first), clip_frame_start,
                                      first)
@@ -41,7 +41,7 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
                 "smoothing": options.smoothing,
                 "options": {"gamma": gamma(options.method)}})
     if times is not None:
-        late = frametimes.out_of_order(frames, times)
+        late = clock.out_of_order(frames, times)
         track.extra["frame_times"] = {"first_utc": min(times).isoformat(),
                                       "last_utc": max(times).isoformat(),
                                       "out_of_order_frames": late}

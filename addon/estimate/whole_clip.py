@@ -42,7 +42,7 @@ from . import finish, frames as clip_frames, motion, native_loader, notes
 from .errors import Cancelled, EstimateError
 from .options import gamma
 from .raw import RawSun
-from ..core import angles, frametimes, trackfile, trimmed_circle
+from ..core import angles, clock, trackfile, trimmed_circle
 
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
@@ -780,7 +780,7 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     reads = _ClipReads(native, clip_path, source, camera, gamma(options.method))
     seconds = None
     if times is not None:
-        by_time = dict(zip(frames, frametimes.seconds_since(times)))
+        by_time = dict(zip(frames, clock.seconds_since(times)))
         seconds = [by_time[f] for f in visit]
     result = estimate(
         native, scene, camera, visit, reads.read_gray, options.ground_object_ids, times_s=seconds,

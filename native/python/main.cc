@@ -10,6 +10,7 @@ void BindEstimate(py::module_& m);
 void BindCalibration(py::module_& m);
 void BindSky(py::module_& m);
 void BindWholeClip(py::module_& m);
+void BindVideo(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -22,4 +23,5 @@ PYBIND11_MODULE(_native, m) {
   sunlapse::python::BindCalibration(m);
   sunlapse::python::BindSky(m);
   sunlapse::python::BindWholeClip(m);
+  sunlapse::python::BindVideo(m);
 }

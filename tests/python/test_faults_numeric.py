@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from core import smoothing, sunpath
+from core import clock, smoothing, sunpath
 from test_sunpath import low_precision_sun
 
 ADDON = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
@@ -99,4 +99,4 @@ def test_physical_fit_refuses_degenerate_inputs_with_a_reason():
 @pytest.mark.parametrize("seconds", [0.0, -5.0, float("nan"), float("inf")])
 def test_zero_or_negative_seconds_per_frame_is_refused(seconds):
     with pytest.raises(ValueError, match="positive"):
-        sunpath.frame_times(dt.datetime(2025, 6, 21, tzinfo=dt.timezone.utc), seconds, [1, 2])
+        clock.frame_times(dt.datetime(2025, 6, 21, tzinfo=dt.timezone.utc), seconds, [1, 2])

@@ -2,7 +2,7 @@ import datetime as dt
 
 import pytest
 
-from core import frametimes
+from core import clock, frametimes
 
 UTC = dt.timezone.utc
 
@@ -15,17 +15,17 @@ def write(tmp_path, text, name="t.csv"):
 
 def test_local_times_are_read_with_the_utc_offset(tmp_path):
     path = write(tmp_path, "frame,local_time\n1,2005-03-21 18:08\n2,2005-03-21 08:06:30\n\n")
-    t = frametimes.read_times(path, utc_offset_hours=1)
+    t = frametimes.read_times(path, clock.zone("", 1))
     assert t == {1: dt.datetime(2005, 3, 21, 17, 8, tzinfo=UTC),
                  2: dt.datetime(2005, 3, 21, 7, 6, 30, tzinfo=UTC)}
 
 
 def test_iso_times_keep_their_own_offset_and_utc_columns_are_utc(tmp_path):
     p1 = write(tmp_path, "frame, time\n3,2005-01-13T09:00:00+02:00\n", "a.csv")
-    assert (frametimes.read_times(p1, utc_offset_hours=1)[3]
+    assert (frametimes.read_times(p1, clock.zone("", 1))[3]
             == dt.datetime(2005, 1, 13, 7, 0, tzinfo=UTC))
     p2 = write(tmp_path, "frame,utc_time\n1,2005-01-13 09:00\n", "b.csv")
-    assert (frametimes.read_times(p2, utc_offset_hours=5)[1]
+    assert (frametimes.read_times(p2, clock.zone("", 5))[1]
             == dt.datetime(2005, 1, 13, 9, 0, tzinfo=UTC))
 
 
@@ -53,13 +53,13 @@ def test_missing_file_and_missing_frames(tmp_path):
 def test_chronological_order_and_out_of_order_frames():
     t = [dt.datetime(2005, 3, 21, h, tzinfo=UTC) for h in (18, 8, 8, 9)]
     frames = [1, 2, 3, 4]
-    assert frametimes.chronological(frames, t) == [1, 2, 3, 0]   # ties keep frame order
-    assert frametimes.chronological(frames, None) == [0, 1, 2, 3]
-    assert frametimes.out_of_order(frames, t) == [2]
-    assert frametimes.seconds_since(t) == [36000.0, 0.0, 0.0, 3600.0]
+    assert clock.chronological(frames, t) == [1, 2, 3, 0]   # ties keep frame order
+    assert clock.chronological(frames, None) == [0, 1, 2, 3]
+    assert clock.out_of_order(frames, t) == [2]
+    assert clock.seconds_since(t) == [36000.0, 0.0, 0.0, 3600.0]
 
 
 def test_local_start_is_hours_after_midnight_in_the_zone():
-    t = frametimes.local_start(dt.date(2005, 3, 21), 10.5, 1.0)
+    t = clock.local_start(dt.date(2005, 3, 21), 10.5, clock.zone("", 1.0))
     assert t.isoformat() == "2005-03-21T10:30:00+01:00"
     assert t.astimezone(dt.timezone.utc).hour == 9

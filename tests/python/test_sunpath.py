@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from core import sunpath
+from core import clock, sunpath
 
 
 def low_precision_sun(t, lat, lon):
@@ -28,7 +28,7 @@ def low_precision_sun(t, lat, lon):
 def clip(lat=43.3, lon=5.4, north=35.0, true_offset_s=240.0, n=90, noise=0.3, seed=0):
     start = dt.datetime(2025, 6, 21, 9, 0, tzinfo=dt.timezone(dt.timedelta(hours=2)))
     frames = list(range(1, n + 1))
-    times = sunpath.frame_times(start, 120.0, frames)
+    times = clock.frame_times(start, 120.0, frames)
     rng = np.random.default_rng(seed)
     true = [low_precision_sun(t + dt.timedelta(seconds=true_offset_s), lat, lon) for t in times]
     z = [a + rng.normal(0, noise) for a, _ in true]

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
-#include <regex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -23,12 +22,6 @@ namespace sunlapse {
 namespace fs = std::filesystem;
 
 namespace {
-
-bool IsImageExtension(std::string ext) {
-  for (auto& c : ext) c = static_cast<char>(std::tolower(c));
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" ||
-         ext == ".tiff" || ext == ".exr" || ext == ".bmp" || ext == ".webp";
-}
 
 std::string AvError(int err) {
   char text[AV_ERROR_MAX_STRING_SIZE] = {0};
@@ -307,46 +300,10 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
   if (!fs::exists(path)) {
     throw std::invalid_argument("path: no such file: " + path);
   }
-  const fs::path p(path);
-  std::smatch m;
-  const std::string name = p.filename().string();
-  // At most 9 digits: the number must fit an int.
-  static const std::regex kNumbered(R"((.*?)(\d{1,9})(\.[A-Za-z]+)$)");
-  if (IsImageExtension(p.extension().string()) &&
-      std::regex_match(name, m, kNumbered)) {
+  if (std::optional<ImageSequence> sequence = FindImageSequence(path)) {
     is_sequence_ = true;
-    const std::string stem = m[1].str();
-    prefix_ = (p.parent_path() / stem).string();
-    digits_ = static_cast<int>(m[2].str().size());
-    first_number_ = std::stoi(m[2].str());
-    suffix_ = m[3].str();
-    // The sequence runs to the highest number present: a gap is missing
-    // frames, not the end of the clip.
-    int last_number = first_number_;
-    const fs::path dir =
-        p.parent_path().empty() ? fs::path(".") : p.parent_path();
-    for (const auto& entry : fs::directory_iterator(dir)) {
-      const std::string other = entry.path().filename().string();
-      if (other.size() <= stem.size() + suffix_.size() ||
-          other.compare(0, stem.size(), stem) ||
-          other.compare(other.size() - suffix_.size(), suffix_.size(),
-                        suffix_)) {
-        continue;
-      }
-      const std::string digits = other.substr(
-          stem.size(), other.size() - stem.size() - suffix_.size());
-      if (digits.empty() || digits.size() > 9 ||
-          digits.find_first_not_of("0123456789") != std::string::npos) {
-        continue;
-      }
-      // Zero-padded names keep their width; unpadded ones may grow.
-      if (digits_ > 1 && m[2].str()[0] == '0' &&
-          static_cast<int>(digits.size()) != digits_) {
-        continue;
-      }
-      last_number = std::max(last_number, std::stoi(digits));
-    }
-    num_frames_ = last_number - first_number_ + 1;
+    sequence_ = *sequence;
+    num_frames_ = sequence_.num_frames();
     num_frames_exact_ = true;
     cv::Mat first;
     const std::string error = DecodeImage(path, &first);
@@ -410,12 +367,6 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
 
 VideoReader::~VideoReader() = default;
 
-std::string VideoReader::SequencePath(int index) const {
-  char number[32];
-  std::snprintf(number, sizeof(number), "%0*d", digits_, first_number_ + index);
-  return prefix_ + number + suffix_;
-}
-
 int VideoReader::CountFrames() {
   if (is_sequence_ || num_frames_exact_) return num_frames_;
   // A second demuxer, so the reading position is untouched.
@@ -467,7 +418,7 @@ bool VideoReader::ReadSequence(const Wanted& want) {
   if (position_ >= num_frames_) return false;
   last_ = FrameReport{};
   last_.index = position_;
-  const std::string file = SequencePath(position_++);
+  const std::string file = sequence_.Path(position_++);
   if (!fs::exists(file)) {
     want.Release();
     last_.status = FrameStatus::kMissingFile;

@@ -10,6 +10,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "sunlapse/video/image_sequence.h"
+
 namespace sunlapse {
 
 // What became of one frame that Read() returned.
@@ -90,7 +92,6 @@ class VideoReader {
 
  private:
   struct Movie;
-  std::string SequencePath(int index) const;
   // What a read makes of a frame (outputs left null are not made).
   struct Wanted {
     cv::Mat* gray = nullptr;
@@ -106,8 +107,7 @@ class VideoReader {
   std::unique_ptr<Movie> movie_;
   std::string path_;
   bool is_sequence_ = false;
-  std::string prefix_, suffix_;
-  int digits_ = 0, first_number_ = 0;
+  ImageSequence sequence_;  // when is_sequence_
   int width_ = 0, height_ = 0, num_frames_ = 0, position_ = 0;
   bool num_frames_exact_ = false;
   double fps_ = 0.0;
