@@ -25,6 +25,12 @@ def wrap_azimuth_deg(azimuth_deg: Any) -> Any:
     return a if np.ndim(a) else float(a)
 
 
+def wrap_signed_deg(angle_deg: Any) -> Any:
+    """An angle wrapped to [-180, 180): the shorter way round."""
+    return (np.asarray(angle_deg) + 180.0) % 360.0 - 180.0 if np.ndim(angle_deg) else \
+        (float(angle_deg) + 180.0) % 360.0 - 180.0
+
+
 def sun_in_world_from_angles(zenith_deg: Any, azimuth_world_deg: Any) -> np.ndarray:
     """Unit vector toward the Sun, (sin z sin a, sin z cos a, cos z); shape
     (..., 3) for array inputs."""
@@ -37,7 +43,8 @@ def angles_from_sun_in_world(sun_in_world: Any) -> Tuple[Any, Any]:
     """(zenith_deg in [0, 180], azimuth_world_deg in [0, 360)) of vectors of
     any non-zero length; floats for one vector, arrays for (..., 3)."""
     v = np.asarray(sun_in_world, dtype=float)
-    norm = np.linalg.norm(v, axis=-1)
+    # A null vector reads as (90, 0), never NaN (smoothing's degenerate fits).
+    norm = np.maximum(np.linalg.norm(v, axis=-1), np.finfo(float).tiny)
     zenith = np.degrees(np.arccos(np.clip(v[..., 2] / norm, -1.0, 1.0)))
     azimuth = wrap_azimuth_deg(np.degrees(np.arctan2(v[..., 0], v[..., 1])))
     if v.ndim == 1:

@@ -10,7 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import List, Optional, Sequence, Tuple
 
-from .angles import angle_between_deg, azimuth_world_from_geographic, sun_in_world_from_angles
+from .angles import (angle_between_deg, azimuth_world_from_geographic, sun_in_world_from_angles,
+                     wrap_signed_deg)
 from .trackfile import Track
 
 __all__ = ["angle_between_deg", "azimuth_difference_deg", "direction", "evaluate"]
@@ -18,7 +19,7 @@ __all__ = ["angle_between_deg", "azimuth_difference_deg", "direction", "evaluate
 
 def azimuth_difference_deg(a: float, b: float) -> float:
     """|a - b| wrapped to [0, 180]."""
-    return abs((a - b + 180.0) % 360.0 - 180.0)
+    return abs(wrap_signed_deg(a - b))
 
 
 def direction(zenith_deg: float, azimuth_world_deg: float) -> Tuple[float, float, float]:

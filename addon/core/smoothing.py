@@ -12,6 +12,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
+from . import angles
+
 
 # Two-pass local smoothing takes at most this many frames' span on either
 # side of a frame (see two_pass_local_directions).
@@ -114,8 +116,7 @@ def two_pass(frames, values, weights=None, degree=1, iterations=6):
 
 
 def _unit_vectors(zenith_deg: np.ndarray, azimuth_deg: np.ndarray) -> np.ndarray:
-    z, a = np.radians(zenith_deg), np.radians(azimuth_deg)
-    return np.stack([np.sin(z) * np.sin(a), np.sin(z) * np.cos(a), np.cos(z)], axis=1)
+    return angles.sun_in_world_from_angles(zenith_deg, azimuth_deg)
 
 
 def two_pass_directions(frames, zenith, azimuth, weights=None, degree=3, iterations=6):
@@ -156,8 +157,7 @@ def two_pass_directions(frames, zenith, azimuth, weights=None, degree=3, iterati
         robust = np.where(r <= k, 1.0, k / np.maximum(r, 1e-12))
     if fitted is None:
         raise ValueError(f"iterations must be at least 1, not {iterations}")
-    zen = np.degrees(np.arccos(np.clip(fitted[:, 2], -1.0, 1.0)))
-    azi = np.degrees(np.arctan2(fitted[:, 0], fitted[:, 1])) % 360.0
+    zen, azi = angles.angles_from_sun_in_world(fitted)
     return [float(v) for v in zen], [float(v) for v in azi]
 
 
@@ -183,9 +183,9 @@ def online_directions(frames, zenith, azimuth, weights=None, **kw):
             azi.append(None)
             continue
         u = np.array([comps[k][i] for k in range(3)])
-        u /= max(float(np.linalg.norm(u)), 1e-12)
-        zen.append(float(np.degrees(np.arccos(np.clip(u[2], -1.0, 1.0)))))
-        azi.append(float(np.degrees(np.arctan2(u[0], u[1])) % 360.0))
+        z, a = angles.angles_from_sun_in_world(u / max(float(np.linalg.norm(u)), 1e-12))
+        zen.append(float(z))
+        azi.append(float(a))
     return zen, azi
 
 
@@ -233,7 +233,7 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
     z_out, a_out = [None] * n, [None] * n
     for k, i in enumerate(order):
         z_out[i] = z_s[k]
-        a_out[i] = None if a_s[k] is None else a_s[k] % 360.0
+        a_out[i] = None if a_s[k] is None else angles.wrap_azimuth_deg(a_s[k])
     return z_out, a_out
 
 
@@ -353,6 +353,5 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
         scale = 1.4826 * float(np.median(r[good])) + 1e-3
         c = 4.685 * scale
         robust = np.where(r < c, (1.0 - (r / c) ** 2) ** 2, 0.0)
-    zen = np.degrees(np.arccos(np.clip(fitted[:, 2], -1.0, 1.0)))
-    azi = np.degrees(np.arctan2(fitted[:, 0], fitted[:, 1])) % 360.0
+    zen, azi = angles.angles_from_sun_in_world(fitted)
     return [float(v) for v in zen], [float(v) for v in azi]

@@ -24,6 +24,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
+from . import angles
+
 # The Sun's hour angle advances 15 deg per hour of (mean) solar time.
 DEG_PER_HOUR = 15.0
 
@@ -49,8 +51,7 @@ class CircleFit:
 
 
 def _unit(zenith_deg, azimuth_deg) -> np.ndarray:
-    z, a = np.radians(zenith_deg), np.radians(azimuth_deg)
-    return np.stack([np.sin(z) * np.sin(a), np.sin(z) * np.cos(a), np.cos(z)], axis=-1)
+    return angles.sun_in_world_from_angles(zenith_deg, azimuth_deg)
 
 
 def _basis(pole_zenith, pole_azimuth):
@@ -151,11 +152,12 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
     out.success = True
     out.latitude_deg = math.degrees(math.asin(max(-1.0, min(1.0, float(p[2])))))
     out.declination_deg = math.degrees(params[2])
-    out.north_offset_deg = math.degrees(math.atan2(p[0], p[1])) % 360.0
+    out.north_offset_deg = angles.angles_from_sun_in_world(p)[1]
     hour = -np.degrees(params[3] + (params[4] if rate is None else rate) * t)
-    out.hour_angle_deg = [float((h + 180.0) % 360.0 - 180.0) for h in hour]
-    out.zenith_deg = [float(math.degrees(math.acos(max(-1.0, min(1.0, v[2]))))) for v in fit_all]
-    out.azimuth_world_deg = [float(math.degrees(math.atan2(v[0], v[1])) % 360.0) for v in fit_all]
+    out.hour_angle_deg = [float(angles.wrap_signed_deg(h)) for h in hour]
+    zenith, azimuth = angles.angles_from_sun_in_world(np.asarray(fit_all))
+    out.zenith_deg = [float(z) for z in zenith]
+    out.azimuth_world_deg = [float(a) for a in azimuth]
     out.residual_deg = float(np.median(ang))
     out.rate_deg = -math.degrees(params[4] if rate is None else rate) / scale
     if abs(out.latitude_deg) > 89.0:

@@ -22,6 +22,8 @@ from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from . import angles
+
 # sun_position(utc_datetime, latitude_deg, longitude_deg) -> (zenith, azimuth)
 SunModel = Callable[[dt.datetime, float, float], Tuple[float, float]]
 
@@ -40,7 +42,7 @@ class PathFit:
 
 
 def _wrap(a):
-    return (np.asarray(a) + 180.0) % 360.0 - 180.0
+    return angles.wrap_signed_deg(np.asarray(a))
 
 
 def fit_sun_path(times: Sequence[dt.datetime], zenith: Sequence[Optional[float]],
