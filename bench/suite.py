@@ -39,13 +39,14 @@ sys.path.insert(0, os.path.join(ROOT, "examples"))
 
 import random_scene  # noqa: E402
 from core import evaluation, trackfile  # noqa: E402
+from estimate import options  # noqa: E402
 
 PASS_MEAN_DEG = 1.0
 PASS_MAX_DEG = 3.0
 CONFIDENT = 0.8
 CONFIDENT_WITHIN_DEG = 2.0
 CONFIDENT_WRONG_DEG = 5.0
-SMOOTHINGS = ("two_pass", "online", "physical")
+SMOOTHINGS = tuple(options.keys(options.SMOOTHINGS))
 
 
 def sun_position():

@@ -31,6 +31,10 @@ SYSTEM_LIBS = {"libc.so.6", "libm.so.6", "libpthread.so.0", "libdl.so.2", "librt
 
 
 def _import_plain(name):
+    # Outside the add-on's package (addon/ on sys.path: tests, benchmarks)
+    # the module beside it is a top-level one.
+    if not ADDON_PACKAGE:
+        name = name.lstrip(".")
     return importlib.import_module(name, ADDON_PACKAGE or None)
 
 
