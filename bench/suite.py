@@ -260,7 +260,7 @@ def main(argv=None):
     p.add_argument("--estimator-only", action="store_true",
                    help="never render: estimate the scenes already in the cache")
     p.add_argument("--render-only", action="store_true", help="render (or reuse), no estimates")
-    p.add_argument("--method", default="default", choices=["default", "thesis"])
+    p.add_argument("--method", default="default", choices=options.keys(options.METHODS))
     p.add_argument("--smoothings", default="two_pass",
                    help=f"comma-separated, of {', '.join(SMOOTHINGS)} (default two_pass)")
     p.add_argument("--cache", default=os.environ.get(
