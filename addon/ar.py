@@ -402,7 +402,7 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     light = ""
     balances = []
     if balance and track is not None:
-        frames = [f.frame for f in results.estimated_frames(track)]
+        frames = [f.frame for f in track.estimated()]
         from .estimate import notes
         picks = notes.spread(frames, BALANCE_FRAMES)
         balances, ground_names = measure_balance(context, track, picks)

@@ -444,7 +444,7 @@ def _run(argv, interrupt):
         context.scene.sunlapse.sun_lamp = sun
         keyed = len(sun.get(results.KEYED_FRAMES_PROP, []))
         print(f"sunlapse: keyed Sun lamp '{sun.name}' on {keyed} frames")
-        skipped = results.extrapolated_frames(track)
+        skipped = track.extrapolated()
         if skipped:
             print(f"sunlapse: warning: {len(skipped)} frame(s) beyond the measured ones "
                   f"({skipped[0]}...{skipped[-1]}) only extrapolate the smoothing: not keyed")

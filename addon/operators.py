@@ -264,7 +264,7 @@ def finish_run(context, track, clip, extra):
     track.clip = clip.filepath
     track.method["options"].update(extra)
     results.store_track(track)
-    done = len(results.estimated_frames(track))
+    done = len(track.estimated())
     raw = sum(1 for f in track.frames if f.raw_zenith_deg is not None)
     msg = (f"Sun estimated on {done}/{len(track.frames)} frames "
            f"({raw} measured, the rest from smoothing)")
@@ -484,8 +484,8 @@ class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         settings.sun_lamp = sun
-        n = len(results.estimated_frames(track))
-        frames = [f.frame for f in results.estimated_frames(track)]
+        n = len(track.estimated())
+        frames = [f.frame for f in track.estimated()]
         msg = (f"Keyed '{sun.name}' ({sun.rotation_mode}) on {n} frames "
                f"({frames[0]}-{frames[-1]})" + (", sky" if settings.sync_sky and results.sky_node(
                    context.scene) is not None else "") +

@@ -43,34 +43,6 @@ def load_track():
         return None
 
 
-def estimated_frames(track):
-    return [f for f in track.frames if f.has_estimate]
-
-
-def measured_span(track):
-    """(first, last) frame with a measured (raw) Sun, or None."""
-    measured = [f.frame for f in track.frames
-                if f.raw_zenith_deg is not None and f.raw_azimuth_deg is not None]
-    return (min(measured), max(measured)) if measured else None
-
-
-def extrapolated_frames(track):
-    """Frames whose Sun only extrapolates the smoothing beyond the measured
-    frames (a clip that ended early, frames lost at its start or end): no
-    measurement backs them, so they are not keyed."""
-    span = measured_span(track)
-    if span is None:  # no raw angles at all (a truth file): nothing tells
-        return []
-    return [f.frame for f in track.frames
-            if f.has_estimate and not span[0] <= f.frame <= span[1]]
-
-
-def keyable_frames(track):
-    """Estimated frames within the measured span (interpolated gaps included)."""
-    skip = set(extrapolated_frames(track))
-    return [f for f in estimated_frames(track) if f.frame not in skip]
-
-
 def _remove_own_keys(obj, paths, frames):
     """Deletes the keyframes sunlapse put on `paths` at `frames`; the user's
     other keys (other frames, other properties) stay."""
@@ -136,9 +108,9 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
 
     Running it again replaces its own keys only. With keyframe_strength the
     lamp's strength follows the measured sun/ambient ratio. Frames that only
-    extrapolate beyond the measured ones are not keyed (extrapolated_frames).
+    extrapolate beyond the measured ones are not keyed (Track.extrapolated).
     """
-    frames = keyable_frames(track)
+    frames = track.keyable()
     if not frames:
         raise ValueError("the track has no measured frame to apply (run Estimate Sun on "
                          "frames that show the scene)")

@@ -14,7 +14,7 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any, Dict, List, Literal, Optional, overload
+from typing import Any, Dict, List, Literal, Optional, Tuple, overload
 
 FORMAT_TRACK = "sunlapse.track"
 FORMAT_TRUTH = "sunlapse.truth"
@@ -113,6 +113,32 @@ class Track:
 
     def problem(self, stage: str) -> Optional[Problem]:
         return next((p for p in self.problems if p.stage == stage), None)
+
+    def estimated(self) -> List[FrameEstimate]:
+        """Frames with a Sun (smoothed)."""
+        return [f for f in self.frames if f.has_estimate]
+
+    def measured_span(self) -> Optional[Tuple[int, int]]:
+        """(first, last) frame with a measured (raw) Sun, or None."""
+        measured = [f.frame for f in self.frames
+                    if f.raw_zenith_deg is not None and f.raw_azimuth_deg is not None]
+        return (min(measured), max(measured)) if measured else None
+
+    def extrapolated(self) -> List[int]:
+        """Frames whose Sun only extrapolates the smoothing beyond the
+        measured frames (a clip that ended early, frames lost at its start or
+        end): no measurement backs them, so they are not keyed."""
+        span = self.measured_span()
+        if span is None:  # no raw angles at all (a truth file): nothing tells
+            return []
+        return [f.frame for f in self.frames
+                if f.has_estimate and not span[0] <= f.frame <= span[1]]
+
+    def keyable(self) -> List[FrameEstimate]:
+        """Estimated frames within the measured span (interpolated gaps
+        included): the frames a lamp is keyed on."""
+        skip = set(self.extrapolated())
+        return [f for f in self.estimated() if f.frame not in skip]
 
     def north_source(self) -> NorthSource:
         if self.extra.get("sun_path_fit"):

@@ -452,7 +452,7 @@ def test_apply_keys_no_extrapolated_frame(empty_scene):
             reason=None if measured else "the clip ended before this frame"))
     track = trackfile.Track(frames=frames)
     frames[3].raw_zenith_deg = frames[3].raw_azimuth_deg = None  # a gap inside: interpolated
-    assert results.extrapolated_frames(track) == [1, 2, 6, 7]
+    assert track.extrapolated() == [1, 2, 6, 7]
     sun = results.apply_track(bpy.context, track)
     assert list(sun[results.KEYED_FRAMES_PROP]) == [3, 4, 5]
 
