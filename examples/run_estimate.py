@@ -5,13 +5,43 @@ Contract (the accuracy benchmarks call it exactly so; extend, never break):
   blender -b SCENE.blend --python-exit-code 1 --python examples/run_estimate.py -- \
       --out TRACK.json [--collection NAME] [--ground NAME ...] [--frames A:B] \
       [--smoothing online|two_pass|physical] [--method thesis|default] \
-      [--apply-lamp] [--save OUT.blend] [--render-ar DIR]
+      [--apply-lamp] [--save OUT.blend] [--render-ar DIR] \
+      [--times CSV] [--latitude DEG] [--longitude DEG] [--date YYYY-MM-DD] \
+      [--start-time HH:MM[:SS]] [--utc-offset HOURS] [--frame-seconds S] \
+      [--fixed-latitude] [--initial-sun ZENITH AZIMUTH]
+
+Flags:
+  --out TRACK.json      the track file to write (*.sun.json; docs/track-format.md)
+  --collection NAME     the collection holding the model (default: every visible mesh)
+  --ground NAME ...     the object(s) the shadows fall on (default: the panel's
+                        Ground, else the one the add-on finds)
+  --frames A:B          scene frames to estimate, inclusive (default: the clip's)
+  --smoothing MODE      two_pass (default), online, or physical (the Sun's true
+                        path: needs the place and the frames' times)
+  --method METHOD       default (the whole clip at once) or thesis (the baseline)
+  --apply-lamp          keyframe a Sun lamp from the track
+  --save OUT.blend      save the .blend here afterwards
+  --render-ar DIR       render the AR composite into DIR
+  --times CSV           each frame's capture time (columns frame,local_time or
+                        utc_time; core/frametimes.py): frames are tracked in
+                        capture order and smoothed over real time
+  --latitude DEG        place, north positive      } physical smoothing; default:
+  --longitude DEG       place, east positive       } the frames' GPS, the panel's
+  --date YYYY-MM-DD     the first frame's local date  } values, else Blender's
+  --start-time HH:MM    the first frame's local time  } Sun Position add-on's
+  --utc-offset HOURS    the local times' offset from UTC (e.g. 2 for CEST)
+  --frame-seconds S     seconds between frames
+  --fixed-latitude      keep the given latitude exactly (default: fitted near it)
+  --initial-sun Z A     start from this Sun on the first frame (degrees, azimuth
+                        as in the track file) instead of estimating it: measures
+                        the tracker alone
 
 Clip, camera and model come from the .blend (active clip, scene camera) unless
 given. On failure it prints one line "sunlapse: error: <reason>" on stderr and
-exits non-zero; the track file is written only when the run succeeds. The
-work is done by the add-on (addon/cli.py), which Blender 4.2+ also offers as
-`blender -c sunlapse SCENE.blend --out ...`.
+exits non-zero (2 a bad flag or file, 3 the scene or clip lacks something, 4 an
+internal error, 130 interrupted); the track file is written only when the run
+succeeds. The work is done by the add-on (addon/cli.py), which Blender 4.2+
+also offers as `blender -c sunlapse SCENE.blend --out ...`.
 """
 
 import importlib.util
