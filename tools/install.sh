@@ -12,7 +12,7 @@ packages=(
   libopencv-dev libeigen3-dev libceres-dev libembree-dev libtbb-dev
   liberfa-dev pybind11-dev libgtest-dev libgmock-dev
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev
-  patchelf debootstrap nasm unzip
+  patchelf debootstrap nasm unzip ccache
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-hypothesis python3-pil
   blender ffmpeg xvfb xauth
   clang-format python3-flake8 mypy

@@ -17,7 +17,11 @@ ensure_py313
 ensure_ffmpeg
 ensure_trixie
 
-export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}"
+# ccache speeds a rebuild when it is there (tools/install.sh installs it); a
+# launcher that is not installed would fail CMake's compiler check.
+if [ -z "${CMAKE_CXX_COMPILER_LAUNCHER:-}" ] && command -v ccache >/dev/null; then
+  export CMAKE_CXX_COMPILER_LAUNCHER=ccache
+fi
 cmake -S "$here" -B "$release_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DPython_EXECUTABLE=/usr/bin/python3 -DSUNLAPSE_BUILD_TESTS=OFF \
   -DSUNLAPSE_COPY_MODULE_TO_ADDON=OFF \
