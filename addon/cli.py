@@ -217,72 +217,6 @@ def check_not_inputs(args, blend_path, clip, times_path):
                              f"give another file name")
 
 
-def physical_inputs(args, context, options):
-    """Place and time for physical smoothing: the flags first, then what the
-    panel gave (`options`, filled by prepare_run), then Blender's Sun Position
-    add-on (its latitude, longitude, date, time and UTC zone). With the
-    frames' times known (a times file) only the place is needed; with no
-    place at all, the Sun's circle about the pole is fitted instead."""
-    import datetime as dt
-    from .core import clock
-    sp = getattr(context.scene, "sun_pos_properties", None)
-
-    def pick(flag, from_options, from_sun_position):
-        if flag is not None:
-            return flag
-        if from_options is not None:
-            return from_options
-        return getattr(sp, from_sun_position, None)
-    lat = pick(args.latitude, options.latitude_deg, "latitude")
-    lon = pick(args.longitude, options.longitude_deg, "longitude")
-    if lat is None and lon is None:
-        # No place anywhere: the Sun's circle about the pole is fitted
-        # instead (core.suncircle), in real time when the seconds per frame
-        # are known, else per frame.
-        seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds
-        if seconds is not None and not (math.isfinite(seconds) and seconds > 0):
-            fail(EXIT_USAGE, f"--frame-seconds {seconds} is not a positive number of seconds")
-        return {"frame_seconds": seconds}
-    if options.frame_times is not None:
-        missing = [n for n, v in (("--latitude", lat), ("--longitude", lon)) if v is None]
-        if missing:
-            fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing))
-        _finite(lat, "latitude", -90, 90, "a latitude in [-90, 90] degrees")
-        _finite(lon, "longitude", -180, 360, "a longitude in [-180, 360] degrees")
-        return {"latitude_deg": lat, "longitude_deg": lon}
-    utc = args.utc_offset if args.utc_offset is not None else getattr(sp, "UTC_zone", 0.0)
-    first = options.first_time if not (args.date or args.start_time) else None
-    try:
-        if first is None:
-            if args.date:
-                day = dt.date.fromisoformat(args.date)
-            elif sp is not None:
-                day = dt.date(sp.year, sp.month, sp.day)
-            else:
-                day = None
-            if args.start_time:
-                hours = parse_clock(args.start_time)
-            else:
-                hours = getattr(sp, "time", None)
-            if day is not None and hours is not None:
-                first = clock.local_start(day, hours, clock.zone("", utc))
-    except (ValueError, OverflowError) as e:  # clock.ClockError too
-        fail(EXIT_USAGE, f"bad --date or --start-time: {e}")
-    seconds = args.frame_seconds if args.frame_seconds is not None else options.frame_seconds
-    missing = [name for name, v in (("--latitude", lat), ("--longitude", lon),
-                                    ("--date and --start-time", first),
-                                    ("--frame-seconds", seconds)) if v is None]
-    if missing:
-        fail(EXIT_USAGE, "--smoothing physical needs " + ", ".join(missing) +
-             " (or --times, or Blender's Sun Position add-on values)")
-    _finite(lat, "latitude", -90, 90, "a latitude in [-90, 90] degrees")
-    _finite(lon, "longitude", -180, 360, "a longitude in [-180, 360] degrees")
-    if not (math.isfinite(seconds) and seconds > 0):
-        fail(EXIT_USAGE, f"--frame-seconds {seconds} is not a positive number of seconds")
-    return {"first_time": first, "frame_seconds": seconds,
-            "latitude_deg": lat, "longitude_deg": lon}
-
-
 class CliError(Exception):
     def __init__(self, code, message):
         super().__init__(message)
@@ -355,9 +289,26 @@ def save_blend_atomically(path):
                 os.unlink(leftover)
 
 
+def place_flags(args):
+    """The place and time the flags give (blender.place.place_and_time works
+    them out with the panel's and the Sun Position add-on's)."""
+    import datetime as dt
+    from .blender.place import PlaceTimeFlags
+    if args.smoothing != "physical":
+        return None
+    return PlaceTimeFlags(
+        latitude_deg=args.latitude, longitude_deg=args.longitude,
+        date=dt.date.fromisoformat(args.date) if args.date else None,
+        start_hours=parse_clock(args.start_time) if args.start_time else None,
+        utc_offset_hours=args.utc_offset, frame_seconds=args.frame_seconds,
+        fixed_latitude=args.fixed_latitude)
+
+
 def _run(argv, interrupt):
     import bpy
-    from . import ar, bridge, operators, register, results
+    from . import register
+    from .blender import ar, gather, job, keys, report
+    from .blender.place import PlaceTimeError
     from .estimate import errors, native_loader, run as estimate_run
     from .core import trackfile
 
@@ -374,8 +325,8 @@ def _run(argv, interrupt):
         if collection is None:
             fail(EXIT_USAGE, f"no collection named '{args.collection}'")
     try:
-        clip = bridge.gather_clip(context)
-    except bridge.SceneError as e:
+        clip = gather.gather_clip(context)
+    except gather.SceneError as e:
         fail(EXIT_SCENE, str(e))
     if not hasattr(bpy.types.Scene, "sunlapse"):
         register()  # properties and operators, as in the UI; the panel's times file
@@ -389,15 +340,11 @@ def _run(argv, interrupt):
         fail(EXIT_USAGE, str(e))
 
     try:
-        scene_n, camera_n, clip, numbers, options, extra = operators.prepare_run(
+        run = job.prepare_job(
             context, collection=collection, ground=args.ground, frames=frames,
             method=args.method, smoothing=args.smoothing,
-            times_file=times_path, utc_offset=args.utc_offset)
-        if args.smoothing == "physical":
-            if args.fixed_latitude:
-                options.fit_latitude = False
-            for key, value in physical_inputs(args, context, options).items():
-                setattr(options, key, value)
+            times_file=times_path, utc_offset=args.utc_offset, place=place_flags(args))
+        clip, numbers, options = run.clip, run.frames, run.options
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)
         if options.frame_times and len(numbers) > 1 and \
@@ -408,9 +355,11 @@ def _run(argv, interrupt):
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "
               f"(Ctrl-C stops)", flush=True)
-        track = estimate_run.run(scene_n, camera_n, clip.filepath, clip.frame_start, numbers,
+        track = estimate_run.run(run.scene, run.camera, clip.filepath, clip.frame_start, numbers,
                                  options, progress=interrupt.progress)
-    except bridge.SceneError as e:
+    except PlaceTimeError as e:
+        fail(EXIT_USAGE, str(e))
+    except gather.SceneError as e:
         fail(EXIT_SCENE, str(e))
     except errors.Cancelled:
         interrupt.check()  # Ctrl-C cancelled the run
@@ -418,9 +367,9 @@ def _run(argv, interrupt):
     except errors.EstimateError as e:
         fail(EXIT_SCENE, str(e))
     interrupt.check()
-    summary = operators.finish_run(context, track, clip,
-                                   dict(extra, method=args.method, frames=list(frames)))
-    if operators.report_level(track) == {"WARNING"}:
+    summary = report.finish_run(context, track, clip,
+                                dict(run.record, method=args.method, frames=list(frames)))
+    if report.report_level(track) == {"WARNING"}:
         print(f"sunlapse: warning: {summary}")
     init = track.initial
     if init:
@@ -438,11 +387,11 @@ def _run(argv, interrupt):
     if args.apply_lamp or args.render_ar:
         interrupt.check()
         try:
-            sun = results.apply_track(context, track, context.scene.sunlapse.sun_lamp)
+            sun = keys.apply_track(context, track, context.scene.sunlapse.sun_lamp)
         except ValueError as e:
             fail(EXIT_SCENE, str(e))
         context.scene.sunlapse.sun_lamp = sun
-        keyed = len(sun.get(results.KEYED_FRAMES_PROP, []))
+        keyed = len(sun.get(keys.KEYED_FRAMES_PROP, []))
         print(f"sunlapse: keyed Sun lamp '{sun.name}' on {keyed} frames")
         skipped = track.extrapolated()
         if skipped:
@@ -452,7 +401,7 @@ def _run(argv, interrupt):
         interrupt.check()
         try:
             print(f"sunlapse: {ar.setup(context)}")
-        except (bridge.SceneError, ValueError) as e:
+        except (gather.SceneError, ValueError) as e:
             fail(EXIT_SCENE, str(e))
         os.makedirs(args.render_ar, exist_ok=True)
         ar.render_frames(context, os.path.abspath(args.render_ar), frames)

@@ -9,10 +9,10 @@ frame marked and its values written under it (Plot over Clip turns it off).
 
 import bpy
 
-from . import results
+from .blender import store
+from .core import angles
 
 _handle = None
-_cache = {"key": None, "track": None}
 
 
 def clip_to_region(region, width, height, x_px, y_px):
@@ -22,21 +22,6 @@ def clip_to_region(region, width, height, x_px, y_px):
     u = (x_px + 0.5) / width
     v = 1.0 - (y_px + 0.5) / height
     return region.view2d.view_to_region(u, v, clip=False)
-
-
-def invalidate(*_):
-    _cache["key"] = None
-
-
-def _track():
-    text = bpy.data.texts.get(results.TEXT_NAME)
-    if text is None:
-        return None
-    key = (text.as_pointer(), len(text.lines), text.lines[0].body if text.lines else "",
-           text.lines[-1].body if text.lines else "")
-    if _cache["key"] != key:
-        _cache["key"], _cache["track"] = key, results.load_track()
-    return _cache["track"]
 
 
 # Plot colours: elevation orange, azimuth blue, confidence grey-green.
@@ -69,10 +54,11 @@ def plot_layout(track, frame, x0, y0, w, h):
         return None
     f0, f1 = track.frames[0].frame, track.frames[-1].frame
     span = max(1, f1 - f0)
-    north = track.extra.get("sun_path_fit") is not None or bool(track.north_offset_deg)
+    north = track.north_known()
 
     def az(f):
-        return f.azimuth_deg % 360 if north else (f.azimuth_deg + track.north_offset_deg) % 360
+        return angles.wrap_azimuth_deg(f.azimuth_deg) if north else \
+            angles.azimuth_world_from_geographic(f.azimuth_deg, track.north_offset_deg)
     series = (("Elevation", ELEVATION_COLOR, [90.0 - f.zenith_deg for f in est]),
               ("Azimuth " + ("from north" if north else "from +Y"), AZIMUTH_COLOR,
                [az(f) for f in est]))
@@ -158,7 +144,7 @@ def _draw():
     region = context.region
     if space is None or space.type != "CLIP_EDITOR" or space.clip is None or region is None:
         return
-    track = _track()
+    track = store.load_track()
     if track is None:
         return
     width, height = space.clip.size
@@ -195,8 +181,8 @@ def register():
     global _handle
     if _handle is None and not bpy.app.background:
         _handle = bpy.types.SpaceClipEditor.draw_handler_add(_draw, (), "WINDOW", "POST_PIXEL")
-    if invalidate not in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.append(invalidate)
+    if store.invalidate not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(store.invalidate)
 
 
 def unregister():
@@ -204,5 +190,5 @@ def unregister():
     if _handle is not None:
         bpy.types.SpaceClipEditor.draw_handler_remove(_handle, "WINDOW")
         _handle = None
-    if invalidate in bpy.app.handlers.load_post:
-        bpy.app.handlers.load_post.remove(invalidate)
+    if store.invalidate in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(store.invalidate)

@@ -9,6 +9,8 @@ sidebar width.
 
 import bpy
 
+from .blender import background, gather, store
+from .core import angles, trackfile
 from .estimate import native_loader
 
 
@@ -56,27 +58,32 @@ def _split(layout):
 
 
 def _running():
-    from . import operators
-    return operators.RUN
+    return background.RUN
 
 
-def angles_text(track, est, north_state):
+def angles_text(track, est):
     """(elevation line, azimuth line) as the Sun Position add-on shows them:
     elevation above the horizon, azimuth clockwise from north (geographic)
     when north is known, else from the scene's +Y."""
     elevation = 90.0 - est.zenith_deg
-    if north_state:
-        az = f"Azimuth {est.azimuth_deg % 360:.1f}° from north"
+    if track.north_known():
+        az = f"Azimuth {angles.wrap_azimuth_deg(est.azimuth_deg):.1f}° from north"
     else:
-        az = f"Azimuth {(est.azimuth_deg + track.north_offset_deg) % 360:.1f}° from +Y"
+        world = angles.azimuth_world_from_geographic(est.azimuth_deg, track.north_offset_deg)
+        az = f"Azimuth {world:.1f}° from +Y"
     return f"Elevation {elevation:.1f}°", az
+
+
+# How the panel names where north came from.
+NORTH_SOURCE = {trackfile.NorthSource.EPHEMERIS: "fitted",
+                trackfile.NorthSource.SUN_CIRCLE: "fitted to the Sun's circle",
+                trackfile.NorthSource.GIVEN: "given"}
 
 
 def draw_sun_summary(layout, context):
     """The stored track on the current frame: elevation, azimuth, north
     offset, confidence, or why the frame has none."""
-    from . import operators, results
-    track = results.load_track()
+    track = store.load_track()
     if track is None:
         layout.label(text="No estimate yet", icon="INFO")
         return
@@ -86,12 +93,12 @@ def draw_sun_summary(layout, context):
     if est is None:
         col.label(text=f"Frame {frame} is outside the track", icon="INFO")
         return
-    north = operators.north_offset_known(track)
+    north = NORTH_SOURCE.get(track.north_source())
     if est.has_estimate:
-        el, az = angles_text(track, est, north)
+        el, az = angles_text(track, est)
         col.label(text=el, icon="LIGHT_SUN")
         col.label(text=az, icon="ORIENTATION_GLOBAL" if north else "ORIENTATION_LOCAL")
-        n = ((track.north_offset_deg + 180.0) % 360.0) - 180.0
+        n = angles.wrap_signed_deg(track.north_offset_deg)
         col.label(text=f"North offset {n:.1f}° ({north})" if north else
                   "North unknown (offset 0°)", icon="BLANK1")
         col.label(text=f"Confidence {est.confidence:.2f}"
@@ -166,11 +173,10 @@ def draw_scene(self, context):
 
 
 def draw_estimate(self, context):
-    from . import bridge
     layout = _split(self.layout)
     s = context.scene.sunlapse
     layout.prop(s, "method")
-    clip = bridge.active_movieclip(context)
+    clip = gather.active_movieclip(context)
     col = layout.column(heading="Frames", align=True)
     col.prop(s, "use_frame_range", text="Only a Range")
     if s.use_frame_range:
@@ -211,8 +217,7 @@ def draw_place(self, context):
     col.prop(s, "fit_latitude", text="Fit Latitude")
     col = layout.column(align=True)
     col.active = physical
-    from . import bridge
-    clip = bridge.active_movieclip(context)
+    clip = gather.active_movieclip(context)
     times_known = bool(s.times_file) or (
         s.use_exif_times and clip is not None and clip.source == "SEQUENCE")
     if not s.times_file:

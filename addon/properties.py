@@ -14,8 +14,8 @@ def _is_mesh(self, obj):
 
 
 def _clip_range(context):
-    from . import bridge
-    clip = bridge.active_movieclip(context)
+    from .blender import gather
+    clip = gather.active_movieclip(context)
     if clip is None:
         return None
     return int(clip.frame_start), int(clip.frame_start + clip.frame_duration - 1)

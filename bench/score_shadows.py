@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(HERE), "examples"))
 import run_estimate  # noqa: E402
 
 run_estimate.load_sunlapse()
-from sunlapse import bridge  # noqa: E402
+from sunlapse.blender import gather  # noqa: E402
 from sunlapse.estimate import frames as estimate_frames, notes  # noqa: E402
 from sunlapse.estimate import options as estimate_options  # noqa: E402
 from sunlapse.core import angles, trackfile  # noqa: E402
@@ -74,10 +74,10 @@ def clip_frames(clip, frames):
 def main(track_path, truth_path):
     ctx = bpy.context
     track, truth = trackfile.read_track(track_path), trackfile.read_track(truth_path)
-    clip = bridge.gather_clip(ctx)
-    cam = bridge.build_camera(bridge.gather_camera(ctx, None, clip, bridge.active_movieclip(ctx)))
-    model = bridge.gather_model(ctx)
-    scene = bridge.build_scene(model)
+    clip = gather.gather_clip(ctx)
+    cam = gather.build_camera(gather.gather_camera(ctx, None, clip, gather.active_movieclip(ctx)))
+    model = gather.gather_model(ctx)
+    scene = gather.build_scene(model)
     ground_ids = model.ids_of(truth.extra.get("ground_objects", ["Ground"]))
     masks = sorted(truth.extra.get("shadow_masks", {}).items(), key=lambda kv: int(kv[0]))
     samples = notes.spread([f.frame for f in truth.frames])

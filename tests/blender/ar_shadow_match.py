@@ -63,7 +63,7 @@ def _file_outputs(scene, folder):
 def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     """Runs the artist's path on preset_dir/scene.blend and measures frame
     `frame`; returns a dict of per-channel ratios (insert, real) and counts."""
-    from sunlapse import ar, bridge, lamp, operators
+    from sunlapse.blender import gather, job, lamp
     from sunlapse.estimate import notes as acquire
     from sunlapse.core import arlight, trackfile
     bpy.ops.wm.open_mainfile(filepath=os.path.join(preset_dir, "scene.blend"))
@@ -75,7 +75,7 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
         assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
     assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
     assert bpy.ops.clip.sunlapse_setup_ar() == {"FINISHED"}
-    insert = bpy.data.objects[ar.INSERT_NAME]
+    insert = bpy.data.objects[gather.INSERT_NAME]
     insert.scale = (INSERT_SCALE,) * 3
     scene.cycles.samples = samples
     scene.cycles.use_denoising = False
@@ -101,12 +101,12 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     mask_frame = min((int(k) for k in masks), key=lambda k: abs(k - frame))
     real_shadow = _load_png_gray(os.path.join(preset_dir, masks[str(mask_frame)])) > 0.5
     settings = scene.sunlapse
-    model, cam, clip = operators.gather_all(bpy.context, settings)
+    model, cam, clip = job.gather_all(bpy.context, settings)
     ids = model.ids_of(truth.extra["ground_objects"])
     t = truth.frame(mask_frame)
     sun = tuple(float(v) for v in lamp.sun_vector(t.zenith_deg,
                                                   t.azimuth_deg + truth.north_offset_deg))
-    ground, _ = acquire.ground_and_model_shadow(bridge.build_scene(model), bridge.build_camera(cam),
+    ground, _ = acquire.ground_and_model_shadow(gather.build_scene(model), gather.build_camera(cam),
                                                 ids, sun)
     ground = (ground > 0) & free & ~arlight.dilate(shade, 1)
     dark = arlight.erode(real_shadow, 1) & ground

@@ -21,8 +21,8 @@ def test_register_and_unregister_leave_nothing_behind(empty_scene):
         assert not hasattr(bpy.types, "VIEW3D_PT_sunlapse")
         assert not hasattr(bpy.types, "SunlapseSettings")
         assert "sunlapse_check_scene" not in dir(bpy.ops.clip)
-        from sunlapse import overlay
-        assert overlay.invalidate not in bpy.app.handlers.load_post
+        from sunlapse.blender import store
+        assert store.invalidate not in bpy.app.handlers.load_post
     finally:
         sunlapse.register()
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import scenes
-from sunlapse import bridge
+from sunlapse.blender import gather
 
 
 def tri_arrays():
@@ -56,14 +56,14 @@ def test_empty_mesh_and_bad_indices(native):
 
 
 def test_empty_model_in_blender(empty_scene):
-    with pytest.raises(bridge.SceneError, match="model is empty"):
-        bridge.gather_model(bpy.context)
+    with pytest.raises(gather.SceneError, match="model is empty"):
+        gather.gather_model(bpy.context)
 
 
 def test_no_camera(empty_scene):
     scenes.add_box_on_plane(empty_scene)
-    with pytest.raises(bridge.SceneError, match="no camera"):
-        bridge.gather_camera(bpy.context)
+    with pytest.raises(gather.SceneError, match="no camera"):
+        gather.gather_camera(bpy.context)
 
 
 def test_bad_camera_values(native):
@@ -82,6 +82,6 @@ def test_clip_aspect_mismatch_is_reported(empty_scene, tmp_path):
     scene.render.resolution_x, scene.render.resolution_y = 1920, 1080
     first = scenes.write_frames(str(tmp_path / "frames"), width=64, height=48)
     clip = scenes.load_clip(scene, first)
-    info = bridge.gather_clip(bpy.context)
-    with pytest.raises(bridge.SceneError, match="aspect"):
-        bridge.gather_camera(bpy.context, None, info, clip)
+    info = gather.gather_clip(bpy.context)
+    with pytest.raises(gather.SceneError, match="aspect"):
+        gather.gather_camera(bpy.context, None, info, clip)

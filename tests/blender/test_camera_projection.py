@@ -5,7 +5,7 @@ from bpy_extras.object_utils import world_to_camera_view
 from mathutils import Vector
 
 import scenes
-from sunlapse import bridge
+from sunlapse.blender import gather
 
 CASES = [
     # fit, sensor w/h, shift, resolution, percentage, pixel aspect
@@ -28,8 +28,8 @@ def test_native_projection_equals_world_to_camera_view(
     cam_obj = scenes.add_camera(scene, (6.0, -9.0, 4.5), (0.5, 0.3, 0.2), lens=28.0,
                                 sensor_fit=fit, sensor_width=sw, sensor_height=sh,
                                 shift=shift)
-    info = bridge.gather_camera(__import__("bpy").context)
-    cam = bridge.build_camera(info)
+    info = gather.gather_camera(__import__("bpy").context)
+    cam = gather.build_camera(info)
     w, h = info.params["width"], info.params["height"]
 
     rng = np.random.default_rng(42)

@@ -425,12 +425,12 @@ PAYLOADS = [
 
 @pytest.mark.parametrize("payload", PAYLOADS)
 def test_a_malformed_stored_track_reads_as_no_track(empty_scene, payload, tmp_path):
-    from sunlapse import overlay, results
-    text = bpy.data.texts.new(results.TEXT_NAME)
+    from sunlapse.blender import store
+    text = bpy.data.texts.new(store.TEXT_NAME)
     text.write(payload)
-    assert results.load_track() is None
-    overlay.invalidate()
-    assert overlay._track() is None
+    assert store.load_track() is None
+    store.invalidate()
+    assert store.load_track() is None
     with pytest.raises(RuntimeError, match="No Sun track"):  # reported, not raised
         bpy.ops.clip.sunlapse_apply_lamp()
     with pytest.raises(RuntimeError, match="No Sun track"):
@@ -439,7 +439,7 @@ def test_a_malformed_stored_track_reads_as_no_track(empty_scene, payload, tmp_pa
 
 
 def test_apply_keys_no_extrapolated_frame(empty_scene):
-    from sunlapse import results
+    from sunlapse.blender import keys
     from sunlapse.core import trackfile
     frames = []
     for f in range(1, 8):
@@ -453,8 +453,8 @@ def test_apply_keys_no_extrapolated_frame(empty_scene):
     track = trackfile.Track(frames=frames)
     frames[3].raw_zenith_deg = frames[3].raw_azimuth_deg = None  # a gap inside: interpolated
     assert track.extrapolated() == [1, 2, 6, 7]
-    sun = results.apply_track(bpy.context, track)
-    assert list(sun[results.KEYED_FRAMES_PROP]) == [3, 4, 5]
+    sun = keys.apply_track(bpy.context, track)
+    assert list(sun[keys.KEYED_FRAMES_PROP]) == [3, 4, 5]
 
 
 # ---------------------------------------------------------------------------
@@ -521,7 +521,8 @@ def test_stored_track_fuzzed_is_refused_or_usable_everywhere(empty_scene, tmp_pa
     is either no track, or one the overlay plot, the panel's summary, Apply
     and the CSV export all take without an exception."""
     from hypothesis import HealthCheck, given, settings, strategies as st
-    from sunlapse import overlay, results
+    from sunlapse import overlay
+    from sunlapse.blender import export, keys, store
     good = {"format": "sunlapse.track", "version": 1, "clip": "c.png", "frame_start": 1,
             "north_offset_deg": 5.0, "method": {}, "initial": None,
             "frames": [{"frame": k, "zenith_deg": 40.0 + k, "azimuth_deg": 100.0 + k,
@@ -542,19 +543,19 @@ def test_stored_track_fuzzed_is_refused_or_usable_everywhere(empty_scene, tmp_pa
         d = json.loads(json.dumps(good))
         d["frames"][index][frame_key] = value_frame
         d[key] = value_top
-        text = bpy.data.texts.get(results.TEXT_NAME) or bpy.data.texts.new(results.TEXT_NAME)
+        text = bpy.data.texts.get(store.TEXT_NAME) or bpy.data.texts.new(store.TEXT_NAME)
         text.clear()
         text.write(json.dumps(d))
-        track = results.load_track()
+        track = store.load_track()
         if track is None:
             return
         overlay.plot_layout(track, 2, 0, 0, 100, 50)
         est = track.frame(2)
         if est is not None and est.has_estimate:
             f"{est.zenith_deg:.2f} {est.azimuth_deg:.2f} {est.confidence:.2f}"
-        results.export_csv(track, str(tmp_path / "t.csv"))
+        export.export_csv(track, str(tmp_path / "t.csv"))
         try:
-            results.apply_track(bpy.context, track)
+            keys.apply_track(bpy.context, track)
         except ValueError as e:  # nothing to key: a message, not a crash
             assert "no measured frame" in str(e)
     check()

@@ -4,7 +4,7 @@ import numpy as np
 from mathutils import Vector
 
 import scenes
-from sunlapse import bridge
+from sunlapse.blender import gather
 
 
 def blender_triangles_and_bounds(objects):
@@ -27,7 +27,7 @@ def test_gathered_triangles_and_bounds_equal_blenders(empty_scene):
     box.modifiers.new("bevel", "BEVEL").segments = 2   # modifiers are honoured
     ground.modifiers.new("sub", "SUBSURF").levels = 2
     bpy.context.view_layer.update()
-    model = bridge.gather_model(bpy.context, coll)
+    model = gather.gather_model(bpy.context, coll)
     count, lo, hi = blender_triangles_and_bounds([ground, box, pole])
     assert model.num_triangles == count
     mlo, mhi = model.bounds()
@@ -35,7 +35,7 @@ def test_gathered_triangles_and_bounds_equal_blenders(empty_scene):
     assert sorted(model.names) == ["Box", "Ground", "Pole"]
     assert model.vertices.dtype == np.float32 and model.triangles.dtype == np.int32
     assert model.object_ids.shape == (model.num_triangles,)
-    assert bridge.guess_ground(model) == ["Ground"]
+    assert gather.guess_ground(model) == ["Ground"]
 
 
 def test_default_model_is_every_visible_mesh(empty_scene):
@@ -43,7 +43,7 @@ def test_default_model_is_every_visible_mesh(empty_scene):
     pole.hide_set(True)
     other = bpy.data.objects.new("Other", bpy.data.meshes.new("empty-mesh"))
     empty_scene.collection.objects.link(other)  # no faces: skipped
-    model = bridge.gather_model(bpy.context)
+    model = gather.gather_model(bpy.context)
     assert sorted(model.names) == ["Box", "Ground"]
 
 
@@ -57,7 +57,7 @@ def test_collection_instances_are_gathered(empty_scene):
     inst.location = (5, 5, 0)
     coll.objects.link(inst)
     bpy.context.view_layer.update()
-    model = bridge.gather_model(bpy.context, coll)
+    model = gather.gather_model(bpy.context, coll)
     assert any(n.startswith("BoxCopy/") for n in model.names)
 
 
@@ -66,9 +66,9 @@ def test_native_hits_agree_with_blender_ray_cast(empty_scene, native):
     scene.render.resolution_x, scene.render.resolution_y = 320, 240
     coll, ground, box, pole = scenes.add_box_on_plane(scene)
     scenes.add_camera(scene, (7, -11, 6), (0, 0, 0.5), lens=30)
-    model = bridge.gather_model(bpy.context, coll)
-    nscene = bridge.build_scene(model)
-    cam = bridge.build_camera(bridge.gather_camera(bpy.context))
+    model = gather.gather_model(bpy.context, coll)
+    nscene = gather.build_scene(model)
+    cam = gather.build_camera(gather.gather_camera(bpy.context))
     rng = np.random.default_rng(3)
     pixels = np.column_stack([rng.uniform(0, 319, 400), rng.uniform(0, 239, 400)])
     hits = nscene.intersect_pixels(cam, pixels)
@@ -92,7 +92,7 @@ def test_native_hits_agree_with_blender_ray_cast(empty_scene, native):
 
 def test_occlusion_from_ground_toward_sun(empty_scene, native):
     coll, ground, box, pole = scenes.add_box_on_plane(empty_scene)
-    nscene = bridge.build_scene(bridge.gather_model(bpy.context, coll))
+    nscene = gather.build_scene(gather.gather_model(bpy.context, coll))
     # Pole at (3,-2), 3 m tall; Sun from the south-west at 45 deg elevation:
     # the ground 1.5 m north-east of the pole is in its shadow.
     to_sun = np.array([-1.0, -1.0, np.sqrt(2.0)], dtype=np.float32)

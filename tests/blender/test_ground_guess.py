@@ -1,8 +1,8 @@
-"""bridge.guess_ground: the lowest large horizontal surface the camera looks
+"""gather.guess_ground: the lowest large horizontal surface the camera looks
 down on, never a ceiling (issue 14)."""
 import numpy as np
 
-from sunlapse import bridge
+from sunlapse.blender import gather
 
 
 def boxes(*specs):
@@ -17,7 +17,7 @@ def boxes(*specs):
             tris += [(base + a, base + b, base + c), (base + a, base + c, base + d)]
         ids += [k] * 12
         names.append(name)
-    return bridge.Model(np.array(verts, np.float32), np.array(tris, np.int32),
+    return gather.Model(np.array(verts, np.float32), np.array(tris, np.int32),
                         np.array(ids, np.int32), names)
 
 
@@ -30,11 +30,11 @@ ROOM = [("Floor", (-5, -5, -0.2), (5, 5, 0.0)),
 def test_a_room_gets_its_floor_not_its_ceiling():
     # Floor and ceiling are slabs of one size: both faces of each count as
     # horizontal, so only their height tells them apart.
-    assert bridge.guess_ground(boxes(*ROOM)) == ["Floor"]
-    assert bridge.guess_ground(boxes(*ROOM), camera=(0, 0, 1.6)) == ["Floor"]
+    assert gather.guess_ground(boxes(*ROOM)) == ["Floor"]
+    assert gather.guess_ground(boxes(*ROOM), camera=(0, 0, 1.6)) == ["Floor"]
     # Listed ceiling first, a larger ceiling: still the floor.
     big = [("Ceiling", (-6, -6, 3.0), (6, 6, 3.2))] + [r for r in ROOM if r[0] != "Ceiling"]
-    assert bridge.guess_ground(boxes(*big)) == ["Floor"]
+    assert gather.guess_ground(boxes(*big)) == ["Floor"]
 
 
 def test_a_ceiling_slab_above_the_camera_is_never_the_ground():
@@ -42,24 +42,24 @@ def test_a_ceiling_slab_above_the_camera_is_never_the_ground():
     # but the camera cannot see its upper face.
     model = boxes(("Canopy", (-10, -10, 4.0), (10, 10, 4.2)),
                   ("Ground", (-3, -3, -0.1), (3, 3, 0.0)))
-    assert bridge.guess_ground(model, camera=(0, -2, 2.0)) == ["Ground"]
+    assert gather.guess_ground(model, camera=(0, -2, 2.0)) == ["Ground"]
 
 
 def test_a_small_pit_does_not_beat_the_plaza():
     model = boxes(("Plaza", (-20, -20, -0.1), (20, 20, 0.0)),
                   ("Drain", (0, 0, -0.6), (0.5, 0.5, -0.5)),
                   ("Roof", (-4, -4, 6.0), (4, 4, 6.2)))
-    assert bridge.guess_ground(model, camera=(0, -30, 10)) == ["Plaza"]
+    assert gather.guess_ground(model, camera=(0, -30, 10)) == ["Plaza"]
 
 
 def test_lawn_and_tiles_at_the_ground_level_are_kept_together():
     model = boxes(("Tiles", (-10, -10, -0.1), (0, 10, 0.0)),
                   ("Lawn", (0, -10, -0.1), (10, 10, 0.02)),
                   ("Table", (-1, -1, 0.9), (1, 1, 1.0)))
-    assert sorted(bridge.guess_ground(model, camera=(0, -20, 5))) == ["Lawn", "Tiles"]
+    assert sorted(gather.guess_ground(model, camera=(0, -20, 5))) == ["Lawn", "Tiles"]
 
 
 def test_no_horizontal_surface_gives_no_guess():
-    wall = bridge.Model(np.array([[-5, 0, 0], [5, 0, 0], [5, 0, 3]], np.float32),
+    wall = gather.Model(np.array([[-5, 0, 0], [5, 0, 0], [5, 0, 3]], np.float32),
                         np.array([[0, 1, 2]], np.int32), np.zeros(1, np.int32), ["Wall"])
-    assert bridge.guess_ground(wall) == []
+    assert gather.guess_ground(wall) == []

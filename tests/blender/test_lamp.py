@@ -5,7 +5,7 @@ import bpy
 import numpy as np
 import pytest
 
-from sunlapse import lamp
+from sunlapse.blender import lamp
 
 MODES = ["QUATERNION", "AXIS_ANGLE", "XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"]
 DIRECTIONS = [(10, 0), (45, 90), (60, 200), (85, 359), (30, 271), (0.5, 45)]

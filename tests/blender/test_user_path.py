@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import sunlapse
-from sunlapse import lamp, results
+from sunlapse.blender import lamp, store
 from sunlapse.core import evaluation, trackfile
 from test_addon import run_estimate
 
@@ -28,7 +28,7 @@ def open_preset(tiny_plaza):
 def estimated(tiny_plaza):
     out, truth = open_preset(tiny_plaza)
     assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
-    track = results.load_track()
+    track = store.load_track()
     assert track is not None and len(track.frames) == 3
     return out, truth, track
 
@@ -47,7 +47,7 @@ def test_estimate_is_stored_and_survives_save_and_reopen(estimated, tmp_path):
     path = str(tmp_path / "saved.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
     bpy.ops.wm.open_mainfile(filepath=path)
-    back = results.load_track()
+    back = store.load_track()
     assert back is not None
     assert [f.zenith_deg for f in back.frames] == [f.zenith_deg for f in track.frames]
 
@@ -136,7 +136,7 @@ def test_ar_setup_and_render(estimated, tmp_path):
     assert "sunlapse_insert" in bpy.data.objects
     assert scene.camera.data.background_images[0].clip == scene.active_clip
     scene.cycles.samples = 2
-    from sunlapse import ar
+    from sunlapse.blender import ar
     ar.render_frames(bpy.context, str(tmp_path / "ar"), (1, 2))
     files = sorted(os.listdir(tmp_path / "ar"))
     assert files == ["ar_0001.png", "ar_0002.png"]
@@ -147,8 +147,8 @@ def test_ar_setup_and_render(estimated, tmp_path):
 
 def test_apply_and_ar_refuse_without_a_track(tiny_plaza):
     open_preset(tiny_plaza)
-    if results.TEXT_NAME in bpy.data.texts:
-        bpy.data.texts.remove(bpy.data.texts[results.TEXT_NAME])
+    if store.TEXT_NAME in bpy.data.texts:
+        bpy.data.texts.remove(bpy.data.texts[store.TEXT_NAME])
     assert not bpy.ops.clip.sunlapse_apply_lamp.poll()
     with pytest.raises(RuntimeError, match="no animated Sun lamp"):
         bpy.ops.clip.sunlapse_setup_ar()
@@ -165,7 +165,7 @@ def test_scripted_run_applies_saves_and_renders(tiny_plaza, tmp_path):
     bpy.ops.wm.open_mainfile(filepath=saved)
     lamps = [o for o in bpy.data.objects if o.type == "LIGHT"]
     assert len(lamps) == 1 and lamps[0].animation_data.action
-    assert results.load_track() is not None
+    assert store.load_track() is not None
 
 
 def test_undo_restores_the_scene_after_apply(estimated):
@@ -179,7 +179,7 @@ def test_undo_restores_the_scene_after_apply(estimated):
     bpy.ops.ed.undo_push(message="Apply to Sun Lamp")
     bpy.ops.ed.undo()
     assert not [o for o in bpy.data.objects if o.type == "LIGHT"]
-    assert results.load_track() is not None  # the estimate itself stays
+    assert store.load_track() is not None  # the estimate itself stays
 
 
 def test_scripted_run_with_physical_smoothing(tiny_plaza, tmp_path):
@@ -215,7 +215,7 @@ def test_panel_physical_smoothing_uses_the_panels_place_and_time(tiny_plaza):
     s.utc_offset = d0.utcoffset().total_seconds() / 3600
     s.frame_seconds = (d1 - d0).total_seconds()
     assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
-    track = results.load_track()
+    track = store.load_track()
     assert track.method["smoothing"] == "physical"
     fit = track.extra["sun_path_fit"]
     assert abs(((fit["north_offset_deg"] - truth.north_offset_deg) + 180) % 360 - 180) < 3
@@ -281,7 +281,7 @@ def test_ar_insert_shadow_matches_the_footages_real_shadows(tiny_plaza, tmp_path
 
 def test_ar_setup_keys_lamp_and_sky_from_the_footage_and_keeps_helpers_out_of_shot(estimated):
     from bpy_extras.object_utils import world_to_camera_view
-    from sunlapse import ar
+    from sunlapse.blender import ar
     out, truth, track = estimated
     scene = bpy.context.scene
     assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
@@ -298,36 +298,36 @@ def test_ar_setup_keys_lamp_and_sky_from_the_footage_and_keeps_helpers_out_of_sh
     assert not (0 <= co.x <= 1 and 0 <= co.y <= 1 and co.z > 0)
     assert scene.view_layers[0].cycles.use_pass_shadow_catcher
     # A second run with Model empty does not take the insert for the model.
-    from sunlapse import operators
-    model, _, _ = operators.gather_all(bpy.context)
-    assert ar.INSERT_NAME not in model.names
+    from sunlapse.blender import gather, job
+    model, _, _ = job.gather_all(bpy.context)
+    assert gather.INSERT_NAME not in model.names
 
 
 def test_ground_is_picked_as_an_object_and_names_match_in_any_case(tiny_plaza):
-    from sunlapse import bridge, operators
+    from sunlapse.blender import gather, job
     open_preset(tiny_plaza)
     s = bpy.context.scene.sunlapse
     s.ground_object = bpy.data.objects["Ground"]
-    model, _, _ = operators.gather_all(bpy.context)
-    assert operators.ground_names(s, model) == ["Ground"]
+    model, _, _ = job.gather_all(bpy.context)
+    assert job.ground_names(s, model) == ["Ground"]
     s.ground_object = None
     s.ground_objects = "ground"
-    assert operators.ground_names(s, model) == ["Ground"]
+    assert job.ground_names(s, model) == ["Ground"]
     s.ground_objects = "Gruond"
-    with pytest.raises(bridge.SceneError, match="'Gruond' is not an object of the model"):
-        operators.ground_names(s, model)
+    with pytest.raises(gather.SceneError, match="'Gruond' is not an object of the model"):
+        job.ground_names(s, model)
 
 
 def test_estimate_refuses_a_second_run_while_one_is_going(tiny_plaza):
-    from sunlapse import operators
+    from sunlapse.blender import background
     open_preset(tiny_plaza)
-    operators.RUN["running"] = True
+    background.RUN["running"] = True
     try:
         with pytest.raises(RuntimeError, match="already running"):
             bpy.ops.clip.sunlapse_estimate()
     finally:
-        operators.RUN["running"] = False
-    assert results.load_track() is None
+        background.RUN["running"] = False
+    assert store.load_track() is None
 
 
 def test_write_to_sun_position(tiny_plaza):
@@ -343,7 +343,7 @@ def test_write_to_sun_position(tiny_plaza):
         s.time_zone = "Europe/Paris"
         s.fit_latitude = False
         assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
-        track = results.load_track()
+        track = store.load_track()
         assert track.extra.get("sun_path_fit"), track.extra
         scene.frame_set(2)
         assert bpy.ops.clip.sunlapse_to_sun_position() == {"FINISHED"}
@@ -409,7 +409,7 @@ def test_image_sequence_with_exif_times_runs_in_capture_order_with_physical_smoo
     s.times_file = ""
     s.latitude = s.longitude = 0.0
     assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
-    track = results.load_track()
+    track = store.load_track()
     assert s.latitude == pytest.approx(gps[0], abs=1e-4)
     assert s.longitude == pytest.approx(gps[1], abs=1e-4)
     assert track.method["options"]["times"] == "exif"

@@ -16,7 +16,8 @@ import run_estimate  # noqa: E402
 
 sunlapse = run_estimate.load_sunlapse()
 sunlapse.register()
-from sunlapse import operators, panels, results  # noqa: E402
+from sunlapse import operators, panels  # noqa: E402
+from sunlapse.blender import background, store  # noqa: E402
 
 mode, out = sys.argv[sys.argv.index("--") + 1:][:2]
 state = {"polls": 0}
@@ -48,12 +49,12 @@ def start():
 
 def poll():
     state["polls"] += 1
-    track = results.load_track()
+    track = store.load_track()
     if mode == "esc":
-        if operators.RUN["running"] and state["polls"] < 60:
+        if background.RUN["running"] and state["polls"] < 60:
             return 0.5
         result("stored", track is not None)
-        result("outcome", json.dumps(operators.RUN["outcome"]))
+        result("outcome", json.dumps(background.RUN["outcome"]))
         bpy.ops.wm.quit_blender()
         return None
     if track is None and state["polls"] < 120:
@@ -176,12 +177,12 @@ def label_fits():
         pass
 
     ctx_region = region
-    running = dict(operators.RUN)
-    operators.RUN.update(running=True, fraction=0.38, cancel=False)  # its progress row too
+    running = dict(background.RUN)
+    background.RUN.update(running=True, fraction=0.38, cancel=False)  # its progress row too
     fp = FakePanel()
     fp.layout = Rec(content)
     panels.draw_progress(fp.layout)
-    operators.RUN.update(running)
+    background.RUN.update(running)
     for section in panels._SECTIONS:
         fp = FakePanel()
         fp.layout = Rec(content)
@@ -261,8 +262,8 @@ def step_scene():
 
 def step_running():
     win = bpy.context.window
-    running = operators.RUN["running"]
-    drawn = operators.RUN["drawn"]
+    running = background.RUN["running"]
+    drawn = background.RUN["drawn"]
     snap("estimating", running=running, drawn=drawn, statusbar=statusbar_rect(win))
     result("running_at_shot", running)
     bpy.app.timers.register(wait_estimate, first_interval=0.5)
@@ -271,10 +272,10 @@ def step_running():
 
 def wait_estimate():
     state["polls"] += 1
-    if operators.RUN["running"] and state["polls"] < 240:
+    if background.RUN["running"] and state["polls"] < 240:
         return 0.5
-    result("outcome", json.dumps(operators.RUN["outcome"]))
-    result("drawn_during_run", operators.RUN["drawn"])
+    result("outcome", json.dumps(background.RUN["outcome"]))
+    result("drawn_during_run", background.RUN["drawn"])
     win, area, region = clip_area()
     with bpy.context.temp_override(window=win, area=area, region=region):
         result("apply", bpy.ops.clip.sunlapse_apply_lamp())
@@ -309,7 +310,7 @@ def step_lamp_panel():
     scene.cycles.preview_samples = 4  # a 2-core test machine
     with bpy.context.temp_override(window=win, area=area,
                                    region=next(r for r in area.regions if r.type == "WINDOW")):
-        from sunlapse import ar
+        from sunlapse.blender import ar
         ar.preview_in_viewports(bpy.context, scene.camera)
         bpy.ops.view3d.view_center_camera()
     bpy.app.timers.register(step_ar, first_interval=6.0)

@@ -1,7 +1,7 @@
 """Pointing a Sun lamp at the Sun (bpy side).
 
 A Blender light shines along its local -Z, so the lamp's local +Z must point
-toward the Sun (DESIGN.md §2). The rotation is written through matrix_world,
+toward the Sun (docs/design.md §4). The rotation is written through matrix_world,
 so Blender stores it in the lamp's own rotation_mode (quaternion, Euler of any
 order, axis-angle), parents included; keyframes go on that mode's property.
 """
@@ -10,6 +10,8 @@ import math
 
 import bpy
 from mathutils import Matrix, Vector
+
+from ..core import angles
 
 SUN_ANGULAR_DIAMETER_DEG = 0.545
 KEYFRAME_GROUP = "sunlapse"
@@ -21,8 +23,7 @@ def rotation_path(obj) -> str:
 
 
 def sun_vector(zenith_deg, azimuth_world_deg) -> Vector:
-    z, a = math.radians(zenith_deg), math.radians(azimuth_world_deg)
-    return Vector((math.sin(z) * math.sin(a), math.sin(z) * math.cos(a), math.cos(z)))
+    return Vector(angles.sun_in_world_from_angles(zenith_deg, azimuth_world_deg).tolist())
 
 
 def point_lamp(obj, zenith_deg, azimuth_world_deg, frame=None):

@@ -1,8 +1,8 @@
 """Gathers what the native core needs from the current Blender scene.
 
 Everything here reads bpy; nothing writes it. Arrays are filled with
-``foreach_get`` (no per-vertex Python loops) in the conventions of DESIGN.md
-§2: world frame = Blender's, OpenCV pixels, degrees at every boundary.
+``foreach_get`` (no per-vertex Python loops) in the conventions of
+docs/design.md §4: world frame = Blender's, OpenCV pixels, degrees at every boundary.
 """
 
 from __future__ import annotations
@@ -14,7 +14,21 @@ from typing import List, Optional, Sequence
 import bpy
 import numpy as np
 
-from .estimate import native_loader
+from ..estimate import native_loader
+
+
+# The sample virtual object the AR setup drops in; objects with the custom
+# property INSERT_PROP are inserts too: never part of the model.
+INSERT_NAME = "sunlapse_insert"
+INSERT_PROP = "sunlapse_insert"
+
+
+def is_insert(obj) -> bool:
+    return obj.name == INSERT_NAME or bool(obj.get(INSERT_PROP))
+
+
+def insert_names():
+    return [o.name for o in bpy.data.objects if is_insert(o)]
 
 
 class SceneError(Exception):
@@ -396,3 +410,34 @@ def build_scene(model: Model):
     """The Embree scene of the model (the BVH build releases the GIL)."""
     native = native_loader.require()
     return native.Scene(model.vertices, model.triangles, model.object_ids)
+
+
+def marked_points(clip, frame):
+    """(name, ground xyz, OpenCV pixel) of every track with a marker on
+    `frame` whose name ends with its ground coordinates ("foot 0 0",
+    "3.2,-1.5", "x y z"); tracks without numbers are listed apart."""
+    import re
+
+    def numbers(name):  # whole tokens only: "p0 1 2" is the point (1, 2)
+        out = []
+        for token in re.split(r"[\s,;]+", name):
+            try:
+                out.append(float(token))
+            except ValueError:
+                pass
+        return out
+    w, h = clip.size
+    points, skipped = [], []
+    for track in clip.tracking.tracks:
+        marker = track.markers.find_frame(frame)
+        nums = numbers(track.name)
+        if marker is None or marker.mute:
+            continue
+        if len(nums) < 2:
+            skipped.append(track.name)
+            continue
+        xyz = (nums[-3], nums[-2], nums[-1]) if len(nums) >= 3 else (nums[-2], nums[-1], 0.0)
+        # Marker positions are 0..1 from the frame's bottom-left corner.
+        px = (marker.co[0] * w - 0.5, (1.0 - marker.co[1]) * h - 0.5)
+        points.append((track.name, xyz, px))
+    return points, skipped

@@ -18,12 +18,10 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from . import bridge, lamp, results
-from .core import arlight
+from . import gather, job, keys, store
+from ..core import angles, arlight
+from ..estimate import errors, frames as clip_frames, notes
 
-INSERT_NAME = "sunlapse_insert"
-# Objects with this custom property are inserts: never part of the model.
-INSERT_PROP = "sunlapse_insert"
 WORLD_NAME = "sunlapse sky"
 # Frames of the clip measured for the light balance (spread over it).
 BALANCE_FRAMES = 5
@@ -33,21 +31,13 @@ AR_KEYS_PROP = "sunlapse_ar_frames"
 ENCLOSED_SKY_SEEN = 0.5
 
 
-def is_insert(obj) -> bool:
-    return obj.name == INSERT_NAME or bool(obj.get(INSERT_PROP))
-
-
-def insert_names():
-    return [o.name for o in bpy.data.objects if is_insert(o)]
-
-
 def _model_objects(context):
     settings = context.scene.sunlapse
     if settings.model_collection is not None:
         objs = settings.model_collection.all_objects
     else:
         objs = [o for o in context.view_layer.objects if o.visible_get()]
-    return [o for o in objs if o.type == "MESH" and not is_insert(o)]
+    return [o for o in objs if o.type == "MESH" and not gather.is_insert(o)]
 
 
 def _compositor(scene, clip):
@@ -96,15 +86,15 @@ def _place_insert(context, camera_obj):
     if not hit:
         loc = Vector((0, 0, 0))
     size = max(0.2, 0.05 * (loc - origin).length)
-    mesh = bpy.data.meshes.new(INSERT_NAME)
+    mesh = bpy.data.meshes.new(gather.INSERT_NAME)
     h = size / 2
     verts = [(x, y, z) for z in (0, size) for y in (-h, h) for x in (-h, h)]
     faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
     mesh.from_pydata(verts, [], faces)
-    obj = bpy.data.objects.new(INSERT_NAME, mesh)
-    obj[INSERT_PROP] = True
+    obj = bpy.data.objects.new(gather.INSERT_NAME, mesh)
+    obj[gather.INSERT_PROP] = True
     obj.location = loc
-    mat = bpy.data.materials.new(INSERT_NAME)
+    mat = bpy.data.materials.new(gather.INSERT_NAME)
     mat.diffuse_color = (0.8, 0.15, 0.1, 1.0)
     mat.use_nodes = True
     mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.8, 0.15, 0.1, 1)
@@ -151,16 +141,13 @@ def measure_balance(context, track, frames):
     ground names): the footage's real shadows on `frames` (the model's cast
     shadow toward the tracked Sun against the lit ground beside it); frames
     where too little shadow shows are left out."""
-    from . import operators  # operators imports this module
-    from .estimate import errors, frames as clip_frames
     settings = context.scene.sunlapse
-    model, cam, clip = operators.gather_all(context, settings)
-    names = operators.ground_names(settings, model) or bridge.guess_ground(model)
+    model, cam, clip = job.gather_all(context, settings)
+    names = job.ground_names(settings, model) or gather.guess_ground(model)
     ids = model.ids_of(names)
     if not ids:
         return [], names
-    scene_n, camera_n = bridge.build_scene(model), bridge.build_camera(cam)
-    from .estimate import notes
+    scene_n, camera_n = gather.build_scene(model), gather.build_camera(cam)
     out = []
     for f in frames:
         est = track.frame(f)
@@ -172,7 +159,8 @@ def measure_balance(context, track, frames):
             continue
         if bgr.shape[0] != camera_n.height or bgr.shape[1] != camera_n.width:
             continue
-        sun = lamp.sun_vector(est.zenith_deg, est.azimuth_deg + track.north_offset_deg)
+        sun = angles.sun_in_world_from_geographic(est.zenith_deg, est.azimuth_deg,
+                                                  track.north_offset_deg)
         ground, shadow = notes.ground_and_model_shadow(scene_n, camera_n, ids, tuple(sun),
                                                        settings.ignore_top_rows)
         rgb = arlight.srgb_to_linear(bgr[..., ::-1] / 255.0)
@@ -313,7 +301,7 @@ def match_render(context, sun_obj, balances, model_objects, ground_names):
     targets, vs, vl = key_light(context, sun_obj, balances)
     f, zenith, bal, _, _ = balances[len(balances) // 2]
     got = render_model_shadows(context, f, bal.shadow_mask, casters,
-                               [o for o in bpy.data.objects if is_insert(o)])
+                               [o for o in bpy.data.objects if gather.is_insert(o)])
     if got is None:
         return None
     seen = arlight.effective_sky_seen(got, targets[f], vs, vl)
@@ -352,10 +340,10 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         raise ValueError("no animated Sun lamp: run Estimate Sun, then Apply to Sun Lamp")
     camera_obj = settings.camera or scene.camera
     if camera_obj is None:
-        raise bridge.SceneError("The scene has no camera.")
-    clip = bridge.active_movieclip(context)
+        raise gather.SceneError("The scene has no camera.")
+    clip = gather.active_movieclip(context)
     if clip is None:
-        raise bridge.SceneError("No clip: open the footage in the Movie Clip Editor.")
+        raise gather.SceneError("No clip: open the footage in the Movie Clip Editor.")
     scene.camera = camera_obj
     scene.render.engine = "CYCLES"
     scene.render.film_transparent = True
@@ -371,7 +359,7 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     cycles_vl = getattr(context.view_layer, "cycles", None)
     if cycles_vl is not None and hasattr(cycles_vl, "use_pass_shadow_catcher"):
         cycles_vl.use_pass_shadow_catcher = True
-    track = results.load_track()
+    track = store.load_track()
     comp_note = ""
     try:
         _compositor(scene, clip)
@@ -396,14 +384,13 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         bg.clip_user.proxy_render_size = "FULL"
     _out_of_shot(sun, camera_obj)
     inserted = ""
-    if add_sample_object and not insert_names():
+    if add_sample_object and not gather.insert_names():
         _place_insert(context, camera_obj)
-        inserted = f", added '{INSERT_NAME}'"
+        inserted = f", added '{gather.INSERT_NAME}'"
     light = ""
     balances = []
     if balance and track is not None:
         frames = [f.frame for f in track.estimated()]
-        from .estimate import notes
         picks = notes.spread(frames, BALANCE_FRAMES)
         balances, ground_names = measure_balance(context, track, picks)
     checked = None
@@ -417,7 +404,7 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
                     warnings.append(f"the check render of the model's shadows failed ({e}): "
                                     f"the light is set from the formula alone")
         if track is not None:
-            results.apply_track(context, track, sun, sync_sky=False)
+            keys.apply_track(context, track, sun, sync_sky=False)
         ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
         seen = np.mean([b[3] for b in balances])
         light = (f"; light from the footage's shadows on {len(balances)} frame(s): shadow/lit "

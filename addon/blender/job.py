@@ -1,0 +1,153 @@
+"""A run's inputs gathered from the Blender scene into one RunJob: the
+native scene and camera, the clip, the frames, the estimate's options (with
+the frames' capture times and the place and time), and what the track
+records about them. bpy reads only, on the main thread."""
+
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Optional
+
+import bpy
+
+from . import gather
+from .place import PlaceTimeFlags, place_and_time, settings_zone
+from ..core import clock, exif, frametimes
+from ..estimate import native_loader
+from ..estimate.options import EstimateOptions
+
+
+@dataclass
+class RunJob:
+    """One estimate's inputs, ready for estimate.run (any thread)."""
+    scene: Any                 # native Scene
+    camera: Any                # native Camera
+    clip: gather.ClipInfo
+    frames: List[int]          # scene frame numbers
+    options: EstimateOptions
+    # Recorded in the track's method options (ground, model, times' source).
+    record: Dict[str, Any] = field(default_factory=dict)
+
+
+def ground_names(settings, model=None):
+    """The picked Ground object and any more named in Other Ground; with the
+    model given, names match its objects whatever their case (raises
+    gather.SceneError naming one that matches none)."""
+    names = [settings.ground_object.name] if settings.ground_object is not None else []
+    names += [n.strip() for n in settings.ground_objects.split(",") if n.strip()]
+    if model is None:
+        return names
+    by_lower = {n.lower(): n for n in model.names}
+    out = []
+    for n in names:
+        match = n if n in model.names else by_lower.get(n.lower())
+        if match is None:
+            raise gather.SceneError(f"Ground: '{n}' is not an object of the model "
+                                    f"(model objects: {', '.join(model.names[:8])}"
+                                    f"{' ...' if len(model.names) > 8 else ''})")
+        if match not in out:
+            out.append(match)
+    return out
+
+
+def gather_all(context, settings=None, movieclip=None, collection=None,
+               camera_obj=None):
+    """Model, camera and clip of the current scene; raises gather.SceneError.
+    AR inserts are never part of the model (with Model empty, every visible
+    mesh would otherwise count)."""
+    settings = settings or context.scene.sunlapse
+    clip = gather.gather_clip(context, movieclip)
+    clip_obj = movieclip or gather.active_movieclip(context)
+    cam = gather.gather_camera(context, camera_obj or settings.camera, clip, clip_obj)
+    model = gather.gather_model(context, collection or settings.model_collection,
+                                exclude=gather.insert_names())
+    return model, cam, clip
+
+
+def load_frame_times(path, utc_offset_hours, clip, frames, tz=None):
+    """{scene frame: aware datetime} for `frames` from a times CSV (its frame
+    column counts the clip's frames from 1); raises gather.SceneError.
+    With `tz` (a zone with daylight saving), local times are read in it on
+    their own date; times with their own offset or in UTC are kept."""
+    try:
+        table = frametimes.read_times(path, tz or clock.zone("", utc_offset_hours))
+        clip_frames = [f - clip.frame_start + 1 for f in range(frames[0], frames[1] + 1)]
+        times = frametimes.times_for(table, clip_frames, path)
+    except (frametimes.FrameTimesError, clock.ClockError) as e:
+        raise gather.SceneError(str(e))
+    return {f: t for f, t in zip(range(frames[0], frames[1] + 1), times)}
+
+
+def exif_times(clip, frames, tz):
+    """({scene frame: UTC time} or None, (lat, lon) or None) from the EXIF
+    data of an image sequence's frames; raises gather.SceneError for a
+    file whose time cannot be read."""
+    sequence = native_loader.require().find_image_sequence(clip.filepath)
+    if sequence is None:
+        return None, None
+    paths = [sequence.path(k) for k in range(min(sequence.num_frames, clip.frame_duration))]
+    try:
+        captures = exif.read_sequence(paths, tz)
+    except exif.ExifError as e:
+        raise gather.SceneError(f"EXIF times: {e}")
+    table = exif.times_by_frame(captures, clip.frame_start)
+    if table is not None and not all(f in table for f in range(frames[0], frames[1] + 1)):
+        table = None
+    return table, exif.place(captures)
+
+
+def prepare_job(context, settings=None, collection=None, ground=None, frames=None,
+                method=None, smoothing=None, times_file=None, utc_offset=None,
+                place: Optional[PlaceTimeFlags] = None, warnings=None) -> RunJob:
+    """Everything a run needs, gathered on the main thread (bpy reads only,
+    and the panel's place filled from the frames' GPS). `times_file` /
+    `utc_offset` override the panel's Frame Times and UTC Offset, `place`
+    the place and time (the CLI's flags: place.place_and_time). The
+    camera's warnings go to `warnings` (a list) when given, else to
+    stdout."""
+    settings = settings or context.scene.sunlapse
+    native_loader.require()
+    model, cam, clip = gather_all(context, settings, collection=collection)
+    names = ground or ground_names(settings, model) or gather.guess_ground(model, cam)
+    missing = [g for g in names if g not in model.names]
+    if missing:
+        raise gather.SceneError(f"ground object(s) not in the model: {', '.join(missing)}")
+    ids = model.ids_of(names)
+    if not ids:
+        raise gather.SceneError("no ground found: pick the object the shadows fall on "
+                                "(Ground in the Scene panel)")
+    if frames is None:
+        frames = (clip.frame_start, clip.frame_end)
+        if settings.use_frame_range:
+            frames = (max(clip.frame_start, settings.frame_start),
+                      min(clip.frame_end, settings.frame_end))
+    if frames[0] > frames[1]:
+        raise gather.SceneError(f"empty frame range {frames[0]}-{frames[1]}")
+    options = EstimateOptions(
+        method=method or settings.method, smoothing=smoothing or settings.smoothing,
+        ignore_top_rows=settings.ignore_top_rows,
+        north_offset_deg=gather.scene_north_offset_deg(context), ground_object_ids=ids)
+    track_extra = {"ground": names, "model_objects": model.names}
+    times_path = times_file if times_file is not None else (
+        settings.times_file and bpy.path.abspath(settings.times_file))
+    gps = None
+    if times_path:
+        utc = utc_offset if utc_offset is not None else settings.utc_offset
+        tz = settings_zone(settings) if settings.time_zone and utc_offset is None else None
+        options.frame_times = load_frame_times(times_path, utc, clip, frames, tz)
+        track_extra["times"] = "times file"
+    elif clip.source == "SEQUENCE" and settings.use_exif_times:
+        table, gps = exif_times(clip, frames, settings_zone(settings))
+        if table is not None:
+            options.frame_times = table
+            track_extra["times"] = "exif"
+        if gps is not None:
+            settings.latitude, settings.longitude = gps
+            track_extra["gps_deg"] = list(gps)
+    if options.smoothing == "physical":
+        place_and_time(context, settings, options, gps, place)
+    for w in cam.warnings:
+        if warnings is None:  # scripted runs: on stdout with the run's other warnings
+            print(f"sunlapse: warning: {w}")
+        else:
+            warnings.append(w)
+    return RunJob(gather.build_scene(model), gather.build_camera(cam), clip,
+                  list(range(frames[0], frames[1] + 1)), options, track_extra)
