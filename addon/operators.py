@@ -74,8 +74,8 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
         except (gather.SceneError, errors.EstimateError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        if not init["success"]:
-            self.report({"ERROR"}, f"No Sun found on frame {frame}: {init['message']}")
+        if init.status != native_loader.require().InitialSunStatus.SUCCESS:
+            self.report({"ERROR"}, f"No Sun found on frame {frame}: {init.message}")
             return {"CANCELLED"}
         try:
             sun = lamp.ensure_sun_lamp(context, settings.sun_lamp)
@@ -85,12 +85,12 @@ class CLIP_OT_sunlapse_initial_sun(bpy.types.Operator):
         settings.sun_lamp = sun
         animated = bool(sun.animation_data and sun.animation_data.action)
         # The estimate is in the world frame: the lamp needs nothing more.
-        lamp.point_lamp(sun, init["zenith_deg"], init["azimuth_deg"],
+        lamp.point_lamp(sun, init.zenith_deg, init.azimuth_deg,
                         frame=frame if animated else None)
-        note = init["message"]
+        note = init.message
         self.report({"WARNING" if note else "INFO"},
-                    f"Sun at zenith {init['zenith_deg']:.1f}°, world azimuth "
-                    f"{init['azimuth_deg']:.1f}° (confidence {init['confidence']:.2f})"
+                    f"Sun at zenith {init.zenith_deg:.1f}°, world azimuth "
+                    f"{init.azimuth_deg:.1f}° (confidence {init.confidence:.2f})"
                     + (f": {note}" if note else ""))
         return {"FINISHED"}
 
@@ -440,10 +440,10 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         except (RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        if not r["success"]:
+        if r.status != native.CameraSolveStatus.SUCCESS:
             extra = (f" (tracks without coordinates in their names: {', '.join(skipped)})"
                      if skipped else "")
-            self.report({"ERROR"}, r["message"] + extra)
+            self.report({"ERROR"}, r.message + extra)
             return {"CANCELLED"}
         cam_obj = scene.sunlapse.camera or scene.camera
         if cam_obj is None:
@@ -455,9 +455,9 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         cam.sensor_fit = "AUTO"
         cam.sensor_width = 36.0
         cam.shift_x = cam.shift_y = 0.0
-        cam.lens = r["focal_px"] * 36.0 / (w if w >= h else h)
+        cam.lens = r.focal_px * 36.0 / (w if w >= h else h)
         from mathutils import Matrix
-        cam_obj.matrix_world = Matrix([list(row) for row in r["matrix_world"]])
+        cam_obj.matrix_world = Matrix([list(row) for row in r.matrix_world])
         # The clip's own tracking camera too, as Blender's solver fills it.
         tc = clip.tracking.camera
         tc.sensor_width = 36.0
@@ -466,11 +466,11 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         scene.render.resolution_x, scene.render.resolution_y = w, h
         scene.render.resolution_percentage = 100
         scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
-        worst = max(zip(r["errors_px"], [p[0] for p in points]))
-        level = "WARNING" if r["message"] else "INFO"
+        worst = max(zip(r.errors_px, [p[0] for p in points]))
+        level = "WARNING" if r.message else "INFO"
         self.report({level}, f"Camera solved from {len(points)} points: lens {cam.lens:.1f} mm, "
-                             f"reprojection {r['rms_px']:.2f} px RMS (worst {worst[0]:.2f} px at "
-                             f"'{worst[1]}')" + (f": {r['message']}" if r["message"] else ""))
+                             f"reprojection {r.rms_px:.2f} px RMS (worst {worst[0]:.2f} px at "
+                             f"'{worst[1]}')" + (f": {r.message}" if r.message else ""))
         return {"FINISHED"}
 
 

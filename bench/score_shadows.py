@@ -96,7 +96,7 @@ def main(track_path, truth_path):
         if found is None:
             ground, shadow = notes.ground_and_model_shadow(scene, cam, ground_ids, d)
         else:
-            ground, shadow = found["ground"], found["model_shadow"]
+            ground, shadow = found.ground, found.model_shadow
         on_ground = ground > 0
         pred = shadow > 0
         img = bpy.data.images.load(os.path.join(os.path.dirname(truth_path), rel))
@@ -104,8 +104,8 @@ def main(track_path, truth_path):
         bpy.data.images.remove(img)
         row = {"frame": int(frame), "model": scores(pred, gt, on_ground)}
         if found is not None:
-            row["unmodelled_regions"] = len(found["regions"])
-            row["model+image"] = scores(pred | (found["mask"] > 0), gt, on_ground)
+            row["unmodelled_regions"] = len(found.regions)
+            row["model+image"] = scores(pred | (found.mask > 0), gt, on_ground)
         rows.append(row)
     mean = {}
     for kind in ("model", "model+image"):

@@ -9,7 +9,8 @@ bounded by the number of samples, not the clip's length.
 
 from __future__ import annotations
 
-from typing import List, Optional, Sequence
+from dataclasses import dataclass
+from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -103,13 +104,24 @@ def note_stride(camera) -> int:
     return max(1, -(-camera.width // NOTE_WIDTH))
 
 
+@dataclass
+class Found:
+    """Unmodelled shadows on one frame, in the camera's pixels: each region
+    as the track file records it (area_px, box, centroid_px, darkening,
+    edge_contrast, touches_model), and the masks looked in."""
+    regions: List[Dict[str, Any]]
+    mask: np.ndarray          # uint8, 255 on the regions (at the note's stride)
+    ground: np.ndarray        # the ground the model's shadow falls on
+    model_shadow: np.ndarray  # the model's own cast shadow
+
+
 def detect_unmodelled_shadows(scene, camera, ground_ids, bgr, sun_in_world, samples,
-                              gamma, top=0) -> Optional[dict]:
+                              gamma, top=0) -> Optional[Found]:
     """Hard ground shadows on one frame (uint8 BGR) that the model does not
     cast toward `sun_in_world`: native.detect_unmodelled_shadows against the
     clip's shadow-free background (the median of `samples`, uint8 BGR frames
     spread over the clip), which tells a shadow from dark paint, stains or
-    engravings. Also returns the masks used ("ground", "model_shadow").
+    engravings. Also returns the masks used.
     None when fewer than 3 samples make no background.
 
     Large frames are looked at every note_stride(camera)-th pixel (frame and
@@ -130,12 +142,12 @@ def detect_unmodelled_shadows(scene, camera, ground_ids, bgr, sun_in_world, samp
     found = native.detect_unmodelled_shadows(
         linear_bgr(reduced(bgr), gamma), linear_bgr(back, gamma), ground, shadow,
         registration_px=max(1, round(w / 320)))
-    if stride > 1:
-        for r in found["regions"]:
-            r["area_px"] *= stride * stride
-            r["box"] = tuple(v * stride for v in r["box"])
-            r["centroid_px"] = tuple(v * stride for v in r["centroid_px"])
-    return dict(found, ground=ground, model_shadow=shadow)
+    regions = [{"area_px": r.area_px * stride * stride,
+                "box": [v * stride for v in r.box],
+                "centroid_px": [v * stride for v in r.centroid_px],
+                "darkening": r.darkening, "edge_contrast": r.edge_contrast,
+                "touches_model": r.touches_model} for r in found.regions]
+    return Found(regions, found.mask, ground, shadow)
 
 
 def note_unmodelled_shadows(track, scene, camera, frame, bgr, sun_in_world, samples, options):
@@ -155,8 +167,7 @@ def note_unmodelled_shadows(track, scene, camera, frame, bgr, sun_in_world, samp
         track.extra["unmodelled_shadows"] = {
             "frame": frame, "skipped": "too few frames for a shadow-free background"}
         return
-    regions = [dict(r, box=list(r["box"]), centroid_px=list(r["centroid_px"]))
-               for r in found["regions"]]
+    regions = found.regions
     track.extra["unmodelled_shadows"] = {"frame": frame, "regions": regions,
                                          "background_frames": len(samples)}
     big = [r for r in regions if r["area_px"] >= HINT_MIN_AREA * camera.width * camera.height

@@ -163,17 +163,12 @@ class _Path:
 
 
 def _path_from(solved) -> _Path:
-    return _Path(direction=[int(d) for d in solved["direction"]],
-                 jump_before=[bool(j) for j in solved["jump_before"]],
-                 measured=[bool(m) for m in solved["measured"]],
-                 explained=[float(v) for v in solved["explained"]],
-                 margin=[float(v) for v in solved["margin"]],
-                 significance=[float(v) for v in solved["significance"]],
-                 path_margin=[float(v) for v in solved["path_margin"]])
-
-
-def _solved(solved) -> bool:
-    return bool(solved["success"])
+    """The native SunPathResult's per-frame fields (each read once: a bound
+    field converts its whole vector on every access)."""
+    return _Path(direction=list(solved.direction), jump_before=list(solved.jump_before),
+                 measured=list(solved.measured), explained=list(solved.explained),
+                 margin=list(solved.margin), significance=list(solved.significance),
+                 path_margin=list(solved.path_margin))
 
 
 def _angle_deg(a, b) -> float:
@@ -435,11 +430,11 @@ class _WholeClip:
         """The Sun's path chosen globally over the sky's evidence."""
         solved = self.native.solve_sun_path(self.sky, self.times_list(), self.starts,
                                             self.path_options)
-        if not _solved(solved):
+        if solved.status != self.native.SunPathStatus.SUCCESS:
             self.result.frames = [
-                RawFrame(f, reason=solved["message"] or self.done.reason(k) or "no evidence")
+                RawFrame(f, reason=solved.message or self.done.reason(k) or "no evidence")
                 for k, f in enumerate(self.frames)]
-            self.result.message = solved["message"]
+            self.result.message = solved.message
             return False
         self.path = _path_from(solved)
         self.mark("path")
@@ -455,7 +450,7 @@ class _WholeClip:
         if prior is not None:
             again = self.native.solve_sun_path(self.sky, self.times_list(), self.starts,
                                                self.path_options, prior)
-            if _solved(again):
+            if again.status == self.native.SunPathStatus.SUCCESS:
                 path = _path_from(again)
                 path.path_margin = _evidence_support(self.path, path, self.directions,
                                                      self.spacing_deg)

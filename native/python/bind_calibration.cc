@@ -19,6 +19,25 @@ void BindCalibration(py::module_& m) {
              "Principal point x, OpenCV pixels; NaN: the image centre.")
       .field("principal_y_px", &CameraSolveOptions::principal_y_px,
              "Principal point y, OpenCV pixels; NaN: the image centre.");
+  py::enum_<CameraSolveResult::Status>(m, "CameraSolveStatus")
+      .value("SUCCESS", CameraSolveResult::Status::kSuccess)
+      .value("TOO_FEW_POINTS", CameraSolveResult::Status::kTooFewPoints)
+      .value("NOT_COPLANAR", CameraSolveResult::Status::kNotCoplanar)
+      .value("NO_FOCAL", CameraSolveResult::Status::kNoFocal)
+      .value("FAILED", CameraSolveResult::Status::kFailed)
+      .value("BEHIND_CAMERA", CameraSolveResult::Status::kBehindCamera);
+
+  py::class_<CameraSolveResult>(m, "CameraSolveResult",
+                                "A camera from marked points (camera_solve.h).")
+      .def_readonly("status", &CameraSolveResult::status)
+      .def_readonly("message", &CameraSolveResult::message)
+      .def_readonly("focal_px", &CameraSolveResult::focal_px)
+      .def_readonly("K", &CameraSolveResult::K)
+      .def_readonly("matrix_world", &CameraSolveResult::blender_matrix_world,
+                    "Blender's Object.matrix_world for the camera")
+      .def_readonly("rms_px", &CameraSolveResult::rms_px)
+      .def_readonly("errors_px", &CameraSolveResult::errors_px);
+
   m.def(
       "solve_camera",
       [](const py::array& points, const py::array& pixels, int width,
@@ -37,15 +56,7 @@ void BindCalibration(py::module_& m) {
         CameraSolveOptions o = OptionsFrom<CameraSolveOptions>(options, kwargs);
         if (!focal_px.is_none()) o.focal_px = focal_px.cast<double>();
         const CameraSolveResult r = SolveCamera(world, px, width, height, o);
-        py::dict d;
-        d["success"] = r.success;
-        d["message"] = r.message;
-        d["focal_px"] = r.focal_px;
-        d["K"] = r.K;
-        d["matrix_world"] = r.blender_matrix_world;
-        d["rms_px"] = r.rms_px;
-        d["errors_px"] = r.errors_px;
-        return d;
+        return r;
       },
       py::arg("points_in_world").noconvert(), py::arg("pixels").noconvert(),
       py::arg("width"), py::arg("height"), py::arg("focal_px") = py::none(),
@@ -55,9 +66,7 @@ void BindCalibration(py::module_& m) {
       "focal_px <= 0 or None estimates the focal length (>= 6 coplanar "
       "points); options=CameraSolveOptions and/or its fields as keyword "
       "arguments. "
-      "Returns a dict "
-      "with success, message, focal_px, K, matrix_world (Blender camera), "
-      "rms_px, errors_px.");
+      "Returns a CameraSolveResult.");
 }
 
 }  // namespace sunlapse::python

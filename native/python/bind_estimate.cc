@@ -35,6 +35,12 @@ py::object NextFrame(VideoReader& r, bool gray) {
   return MatAsArray(std::move(image));
 }
 
+// DetectUnmodelledShadows' result with its mask as numpy.
+struct UnmodelledShadowsResult {
+  py::array mask;
+  std::vector<UnmodelledShadow> regions;
+};
+
 InitialSunMethod ParseMethod(const std::string& m) {
   if (m == "thesis") return InitialSunMethod::kThesis;
   if (m == "default") return InitialSunMethod::kDefault;
@@ -174,6 +180,54 @@ void BindTrackerMethods(Class& cls) {
 }  // namespace
 
 void BindEstimate(py::module_& m) {
+  py::enum_<InitialSunResult::Status>(m, "InitialSunStatus")
+      .value("SUCCESS", InitialSunResult::Status::kSuccess)
+      .value("TOO_FEW_PIXELS", InitialSunResult::Status::kTooFewPixels)
+      .value("NO_LIGHT", InitialSunResult::Status::kNoLight)
+      .value("CANCELLED", InitialSunResult::Status::kCancelled);
+
+  py::class_<InitialSunResult>(m, "InitialSunResult",
+                               "The initial Sun on one frame (initial_sun.h).")
+      .def_readonly("status", &InitialSunResult::status)
+      .def_readonly("message", &InitialSunResult::message)
+      .def_readonly("zenith_deg", &InitialSunResult::zenith_deg)
+      .def_readonly("azimuth_deg", &InitialSunResult::azimuth_deg,
+                    "world azimuth, clockwise from +Y")
+      .def_readonly("sun_in_world", &InitialSunResult::sun_in_world)
+      .def_readonly("sun_intensity", &InitialSunResult::sun_intensity)
+      .def_readonly("ambient_intensity", &InitialSunResult::ambient_intensity)
+      .def_readonly("light_intensities", &InitialSunResult::light_intensities)
+      .def_readonly("albedo_per_object", &InitialSunResult::albedo_per_object)
+      .def_readonly("residual_rms", &InitialSunResult::residual_rms)
+      .def_readonly("inlier_fraction", &InitialSunResult::inlier_fraction)
+      .def_readonly("loss_scale_abs", &InitialSunResult::loss_scale_abs)
+      .def_readonly("spread_deg", &InitialSunResult::spread_deg)
+      .def_readonly("confidence", &InitialSunResult::confidence)
+      .def_readonly("num_pixels", &InitialSunResult::num_pixels)
+      .def_readonly("seconds", &InitialSunResult::seconds);
+
+  py::class_<UnmodelledShadow>(m, "UnmodelledShadow",
+                               "A hard ground shadow the model does not cast.")
+      .def_readonly("area_px", &UnmodelledShadow::area_px)
+      .def_property_readonly("box",
+                             [](const UnmodelledShadow& u) {
+                               return py::make_tuple(u.box.x, u.box.y,
+                                                     u.box.width, u.box.height);
+                             })
+      .def_property_readonly("centroid_px",
+                             [](const UnmodelledShadow& u) {
+                               return py::make_tuple(u.centroid_px.x(),
+                                                     u.centroid_px.y());
+                             })
+      .def_readonly("darkening", &UnmodelledShadow::darkening)
+      .def_readonly("edge_contrast", &UnmodelledShadow::edge_contrast)
+      .def_readonly("touches_model", &UnmodelledShadow::touches_model);
+
+  py::class_<UnmodelledShadowsResult>(m, "UnmodelledShadows")
+      .def_readonly("mask", &UnmodelledShadowsResult::mask,
+                    "uint8 (H,W), 255 on the regions")
+      .def_readonly("regions", &UnmodelledShadowsResult::regions);
+
   BindOptions(m);
   py::class_<ShadowTracker> shadow_tracker(
       m, "ShadowTracker",
@@ -401,35 +455,16 @@ void BindEstimate(py::module_& m) {
           py::gil_scoped_release release;
           r = DetectUnmodelledShadows(f, b, g, s, o);
         }
-        py::array_t<uint8_t> out_mask({r.mask.rows, r.mask.cols});
-        std::memcpy(out_mask.mutable_data(), r.mask.data, r.mask.total());
-        py::list regions;
-        for (const UnmodelledShadow& u : r.regions) {
-          py::dict d;
-          d["area_px"] = u.area_px;
-          d["box"] =
-              py::make_tuple(u.box.x, u.box.y, u.box.width, u.box.height);
-          d["centroid_px"] =
-              py::make_tuple(u.centroid_px.x(), u.centroid_px.y());
-          d["darkening"] = u.darkening;
-          d["edge_contrast"] = u.edge_contrast;
-          d["touches_model"] = u.touches_model;
-          regions.append(d);
-        }
-        py::dict d;
-        d["mask"] = out_mask;
-        d["regions"] = regions;
-        return d;
+        return UnmodelledShadowsResult{MatAsArray(r.mask),
+                                       std::move(r.regions)};
       },
       py::arg("frame").noconvert(), py::arg("background"),
       py::arg("ground").noconvert(), py::arg("model_shadow").noconvert(),
       py::kw_only(), py::arg("options") = py::none(),
       "Options: options=UnmodelledShadowOptions and/or its fields as keyword "
-      "arguments. Hard ground shadows the model does not explain: {'mask': "
-      "uint8 (H,W) "
-      "255 on "
-      "them, 'regions': [{'area_px', 'box', 'centroid_px', 'darkening', "
-      "'edge_contrast', 'touches_model'}]}. frame/background float32 gray "
+      "arguments. Hard ground shadows the model does not explain: an "
+      "UnmodelledShadows (mask: uint8 (H,W), 255 on them; regions: "
+      "UnmodelledShadow list). frame/background float32 gray "
       "(H,W) or linear BGR (H,W,3), "
       "background None for the frame alone; "
       "ground/model_shadow uint8 (H,W) masks.");
@@ -460,24 +495,7 @@ void BindEstimate(py::module_& m) {
           py::gil_scoped_release release;
           r = EstimateInitialSun(scene, camera, img, o, cb);
         }
-        py::dict d;
-        d["success"] = r.success;
-        d["message"] = r.message;
-        d["zenith_deg"] = r.zenith_deg;
-        d["azimuth_deg"] = r.azimuth_deg;
-        d["sun_in_world"] = r.sun_in_world;
-        d["sun_intensity"] = r.sun_intensity;
-        d["ambient_intensity"] = r.ambient_intensity;
-        d["light_intensities"] = r.light_intensities;
-        d["albedo_per_object"] = r.albedo_per_object;
-        d["residual_rms"] = r.residual_rms;
-        d["inlier_fraction"] = r.inlier_fraction;
-        d["loss_scale_abs"] = r.loss_scale_abs;
-        d["spread_deg"] = r.spread_deg;
-        d["confidence"] = r.confidence;
-        d["num_pixels"] = r.num_pixels;
-        d["seconds"] = r.seconds;
-        return d;
+        return r;
       },
       py::arg("scene"), py::arg("camera"), py::arg("frame").noconvert(),
       py::kw_only(), py::arg("progress") = py::none(),

@@ -60,6 +60,33 @@ void BindSky(py::module_& m) {
       .value("UNUSABLE", FrameEvidence::Status::kUnusable)
       .value("NO_SHADOWS", FrameEvidence::Status::kNoShadows);
 
+  py::enum_<SunPathResult::Status>(m, "SunPathStatus")
+      .value("SUCCESS", SunPathResult::Status::kSuccess)
+      .value("NO_EVIDENCE", SunPathResult::Status::kNoEvidence);
+
+  py::class_<SunPathResult>(
+      m, "SunPathResult",
+      "The Sun's path over the evidence's frames (sun_path.h); "
+      "per-frame fields are lists.")
+      .def_readonly("status", &SunPathResult::status)
+      .def_readonly("message", &SunPathResult::message)
+      .def_readonly("direction", &SunPathResult::direction)
+      .def_property_readonly("jump_before",
+                             [](const SunPathResult& r) {
+                               return std::vector<bool>(r.jump_before.begin(),
+                                                        r.jump_before.end());
+                             })
+      .def_property_readonly("measured",
+                             [](const SunPathResult& r) {
+                               return std::vector<bool>(r.measured.begin(),
+                                                        r.measured.end());
+                             })
+      .def_readonly("explained", &SunPathResult::explained)
+      .def_readonly("margin", &SunPathResult::margin)
+      .def_readonly("significance", &SunPathResult::significance)
+      .def_readonly("path_margin", &SunPathResult::path_margin)
+      .def_readonly("cost", &SunPathResult::cost);
+
   py::class_<FrameEvidence>(m, "FrameEvidence")
       .def_readonly("status", &FrameEvidence::status)
       .def_readonly("message", &FrameEvidence::message)
@@ -149,20 +176,7 @@ void BindSky(py::module_& m) {
           py::gil_scoped_release release;
           r = SolveSunPath(e, times_s, segment_start, o, prior);
         }
-        py::dict out;
-        out["success"] = r.status == SunPathResult::Status::kSuccess;
-        out["message"] = r.message;
-        out["direction"] = r.direction;
-        out["jump_before"] =
-            std::vector<bool>(r.jump_before.begin(), r.jump_before.end());
-        out["measured"] =
-            std::vector<bool>(r.measured.begin(), r.measured.end());
-        out["explained"] = r.explained;
-        out["margin"] = r.margin;
-        out["significance"] = r.significance;
-        out["path_margin"] = r.path_margin;
-        out["cost"] = r.cost;
-        return out;
+        return r;
       },
       py::arg("evidence"), py::arg("times_s") = std::vector<double>(),
       py::arg("segment_start") = std::vector<uint8_t>(),

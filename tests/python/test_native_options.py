@@ -78,3 +78,24 @@ def test_trackers_take_the_ground_ids_positionally_or_in_the_options():
         native.ShadowTracker(scene, cam)
     with pytest.raises(ValueError, match="band_radius_px"):
         native.ShadowTracker(scene, cam, [0], band_radius_px=0)
+
+
+def test_stage_results_are_classes_with_a_status_enum_not_dicts():
+    """Callers decide by a result's status, never by its message's text."""
+    few = native.solve_camera(np.zeros((3, 3)), np.zeros((3, 2)), 320, 240)
+    assert not isinstance(few, dict)
+    assert few.status == native.CameraSolveStatus.TOO_FEW_POINTS
+    assert "at least 6" in few.message
+    v = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], dtype=np.float32)
+    scene = native.Scene(v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32),
+                         np.zeros(2, dtype=np.int32))
+    m = np.eye(4)
+    m[2, 3] = 10.0
+    cam = native.Camera.from_blender(lens_mm=35, sensor_width_mm=36, sensor_height_mm=24,
+                                     width=64, height=48, matrix_world=m)
+    gray = np.full((48, 64), 0.5, dtype=np.float32)
+    stopped = native.estimate_initial_sun(scene, cam, gray, progress=lambda f: False)
+    assert stopped.status == native.InitialSunStatus.CANCELLED
+    assert native.estimate_initial_sun(scene, cam, gray).status != \
+        native.InitialSunStatus.CANCELLED
+    assert {"SUCCESS", "NO_EVIDENCE"} <= set(native.SunPathStatus.__members__)

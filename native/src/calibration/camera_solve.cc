@@ -1,4 +1,5 @@
 #include "sunlapse/calibration/camera_solve.h"
+#include "sunlapse/common/require.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -9,10 +10,6 @@
 
 namespace sunlapse {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 // The best-fit plane of the points: its centre, its axes (rows: the two in
 // the plane by decreasing spread, then the normal, right-handed), and how far
@@ -61,6 +58,7 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
   const bool estimate_focal = !(o.focal_px > 0);
   const size_t need = estimate_focal ? 6 : 4;
   if (world.size() < need) {
+    out.status = CameraSolveResult::Status::kTooFewPoints;
     out.message = "need at least " + std::to_string(need) + " marked points" +
                   (estimate_focal ? " to estimate the focal length" : "") +
                   ", got " + std::to_string(world.size());
@@ -82,6 +80,7 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
     if (estimate_focal) {
       const PlaneFit plane = FitPlane(world);
       if (plane.flatness > 1e-3) {
+        out.status = CameraSolveResult::Status::kNotCoplanar;
         out.message =
             "estimating the focal length needs coplanar points (e.g. all on "
             "the "
@@ -108,6 +107,7 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
               cv::CALIB_FIX_K1 | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3);
       f = K.at<double>(0, 0);
       if (!(f > 0) || !std::isfinite(f)) {
+        out.status = CameraSolveResult::Status::kNoFocal;
         out.message =
             "the focal length could not be estimated (points too few or seen "
             "head-on): give the focal length";
@@ -128,6 +128,7 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
     }
     out.rms_px = std::sqrt(sum2 / img.size());
   } catch (const cv::Exception& e) {
+    out.status = CameraSolveResult::Status::kFailed;
     out.message = std::string("the solve failed: ") + e.what();
     return out;
   }
@@ -149,12 +150,13 @@ CameraSolveResult SolveCamera(const std::vector<Eigen::Vector3d>& world,
   // Every point must lie in front of the camera.
   for (const auto& p : world) {
     if ((r * p + t).z() <= 0) {
+      out.status = CameraSolveResult::Status::kBehindCamera;
       out.message =
           "the solution puts marked points behind the camera: check the points";
       return out;
     }
   }
-  out.success = true;
+  out.status = CameraSolveResult::Status::kSuccess;
   if (out.rms_px > 3.0) {
     out.message = "reprojection error " +
                   std::to_string(out.rms_px).substr(0, 5) +

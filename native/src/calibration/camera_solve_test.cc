@@ -34,7 +34,7 @@ TEST(SolveCamera, RecoversFocalAndPoseFromExactGroundPoints) {
   std::vector<Eigen::Vector2d> px;
   Marks(truth, 0.0, &w, &px);
   const CameraSolveResult r = SolveCamera(w, px, 320, 240);
-  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_NEAR(r.focal_px, truth.K()(0, 0), 1e-3 * truth.K()(0, 0));
   EXPECT_LT((r.blender_matrix_world.block<3, 1>(0, 3) - truth.center_in_world())
                 .norm(),
@@ -63,7 +63,7 @@ TEST(SolveCamera, NoisyMarksGiveAConsistentCamera) {
   std::vector<Eigen::Vector2d> px;
   Marks(truth, 0.3, &w, &px);
   const CameraSolveResult r = SolveCamera(w, px, 320, 240);
-  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_NEAR(r.focal_px, truth.K()(0, 0), 0.05 * truth.K()(0, 0));
   EXPECT_LT((r.blender_matrix_world.block<3, 1>(0, 3) - truth.center_in_world())
                 .norm(),
@@ -81,7 +81,7 @@ TEST(SolveCamera, GivenFocalNeedsFewerPoints) {
   CameraSolveOptions o;
   o.focal_px = truth.K()(0, 0);
   const CameraSolveResult r = SolveCamera(w, px, 320, 240, o);
-  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_LT(r.rms_px, 1e-3);
 }
 
@@ -92,10 +92,16 @@ TEST(SolveCamera, SaysWhatIsMissingOrWrong) {
   Marks(truth, 0.0, &w, &px);
   std::vector<Eigen::Vector3d> w5(w.begin(), w.begin() + 5);
   std::vector<Eigen::Vector2d> p5(px.begin(), px.begin() + 5);
-  EXPECT_NE(SolveCamera(w5, p5, 320, 240).message.find("at least 6"),
-            std::string::npos);
+  const CameraSolveResult few = SolveCamera(w5, p5, 320, 240);
+  EXPECT_EQ(few.status, CameraSolveResult::Status::kTooFewPoints);
+  EXPECT_NE(few.message.find("at least 6"), std::string::npos);
+  std::vector<Eigen::Vector3d> off_plane = w;
+  off_plane[3].z() += 1.0;  // the focal length needs points on one plane
+  EXPECT_EQ(SolveCamera(off_plane, px, 320, 240).status,
+            CameraSolveResult::Status::kNotCoplanar);
   std::swap(px[0], px[7]);  // two points named wrongly
   const CameraSolveResult r = SolveCamera(w, px, 320, 240);
+  EXPECT_TRUE(r.ok());  // a camera, with a warning
   EXPECT_GT(r.rms_px, 3.0);
   EXPECT_NE(r.message, "");
   EXPECT_THROW(SolveCamera(w, p5, 320, 240), std::invalid_argument);

@@ -1,4 +1,5 @@
 #include "sunlapse/ephemeris/sun_position.h"
+#include "sunlapse/common/require.h"
 
 #include <erfa.h>
 
@@ -12,10 +13,6 @@ namespace sunlapse {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 }  // namespace
 

@@ -1,4 +1,5 @@
 #include "sunlapse/initial/initial_sun.h"
+#include "sunlapse/common/require.h"
 
 #include "sunlapse/common/angles.h"
 #include "sunlapse/common/robust_fit.h"
@@ -16,10 +17,6 @@ namespace sunlapse {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 struct Cancelled {};
 
@@ -417,7 +414,7 @@ void EstimateThesis(const Scene& scene, const Samples& s,
   out->ambient_intensity = x[0];
   out->sun_intensity = total;
   if (!(total > 0) || centre_of_intensity.norm() < 1e-12) {
-    out->success = false;
+    out->status = InitialSunResult::Status::kNoLight;
     out->message = "no light explains the image (all fitted intensities are 0)";
     return;
   }
@@ -492,7 +489,7 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
                      sorted.end());
     out.loss_scale_abs =
         std::max(1e-4, options.loss_scale * sorted[sorted.size() / 2]);
-    out.success = true;
+    out.status = InitialSunResult::Status::kSuccess;
     if (options.method == InitialSunMethod::kThesis) {
       EstimateThesis(scene, s, options, progress, &out);
     } else {
@@ -502,6 +499,7 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
     Report(progress, 1.0);
   } catch (const Cancelled&) {
     out = InitialSunResult();
+    out.status = InitialSunResult::Status::kCancelled;
     out.message = "cancelled";
   }
   out.seconds =

@@ -40,7 +40,7 @@ TEST_P(InitialSunRecovers, KnownDirectionWithinHalfADegree) {
   const cv::Mat img = Render(scene, cam, sun, {0.35, 0.8, 0.15}, 0.01);
   InitialSunOptions o;
   const InitialSunResult r = EstimateInitialSun(scene, cam, img, o);
-  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   const double err = AngleBetweenDeg(r.sun_in_world, sun);
   EXPECT_LT(err, 0.5) << "zenith " << r.zenith_deg << " azimuth "
                       << r.azimuth_deg;
@@ -67,7 +67,7 @@ TEST(InitialSun, ObjectsMissingFromTheModelDoNotDragTheAnswer) {
       Render(truth_scene, cam, sun, {0.35, 0.8, 0.15, 0.5}, 0.01);
   const InitialSunResult r =
       EstimateInitialSun(model, cam, img, InitialSunOptions());
-  ASSERT_TRUE(r.success);
+  ASSERT_TRUE(r.ok());
   EXPECT_LT(AngleBetweenDeg(r.sun_in_world, sun), 1.0);
 }
 
@@ -102,7 +102,7 @@ TEST(InitialSun, ThesisBaselineRecoversTheLightOfItsOwnModel) {
   InitialSunOptions o;
   o.method = InitialSunMethod::kThesis;
   const InitialSunResult r = EstimateInitialSun(scene, cam, img, o);
-  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(r.ok()) << r.message;
   ASSERT_EQ(r.light_intensities.size(), 8u);
   for (int i = 0; i < 8; ++i) {
     EXPECT_NEAR(r.light_intensities[i], i == k ? 0.5 : 0.0, 0.01)
@@ -134,8 +134,8 @@ TEST(InitialSun, CancelsWhenProgressSaysSo) {
   const InitialSunResult r =
       EstimateInitialSun(scene, cam, img, InitialSunOptions(),
                          [&](double) { return ++calls < 3; });
-  EXPECT_FALSE(r.success);
-  EXPECT_EQ(r.message, "cancelled");
+  EXPECT_FALSE(r.ok());
+  EXPECT_EQ(r.status, InitialSunResult::Status::kCancelled);
 }
 
 TEST(InitialSun, RejectsBadInput) {
@@ -162,7 +162,7 @@ TEST(InitialSun, RejectsBadInput) {
   const InitialSunResult r =
       EstimateInitialSun(scene, Camera::FromBlender(p),
                          cv::Mat(120, 160, CV_32F, 0.5f), InitialSunOptions());
-  EXPECT_FALSE(r.success);
+  EXPECT_EQ(r.status, InitialSunResult::Status::kTooFewPixels);
   EXPECT_NE(r.message.find("too few"), std::string::npos);
 }
 

@@ -1,4 +1,5 @@
 #include "sunlapse/scene/camera.h"
+#include "sunlapse/common/require.h"
 
 #include <Eigen/SVD>
 
@@ -8,10 +9,6 @@
 
 namespace sunlapse {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 bool Finite(double v) { return std::isfinite(v); }
 

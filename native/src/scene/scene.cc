@@ -1,4 +1,5 @@
 #include "sunlapse/scene/scene.h"
+#include "sunlapse/common/require.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -17,10 +18,6 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // Rays per task: large enough to amortise scheduling, small enough to balance.
 constexpr int64_t kGrain = 256;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 std::string EmbreeErrorName(RTCError e) {
   switch (e) {

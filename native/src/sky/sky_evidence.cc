@@ -1,4 +1,5 @@
 #include "sunlapse/sky/sky_evidence.h"
+#include "sunlapse/common/require.h"
 
 #include "sunlapse/common/angles.h"
 
@@ -15,10 +16,6 @@ namespace sunlapse {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)

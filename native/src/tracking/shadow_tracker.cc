@@ -1,4 +1,5 @@
 #include "sunlapse/tracking/shadow_tracker.h"
+#include "sunlapse/common/require.h"
 
 #include <algorithm>
 #include <chrono>
@@ -26,10 +27,6 @@ constexpr double kShrink = 0.4;
 // How far (in first search steps) a frame's search may walk from the
 // predicted Sun before the frame counts as lost.
 constexpr double kMaxWalkSteps = 10;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 }  // namespace
 

@@ -1,4 +1,5 @@
 #include "sunlapse/tracking/thesis_tracker.h"
+#include "sunlapse/common/require.h"
 
 #include <algorithm>
 #include <chrono>
@@ -15,10 +16,6 @@ namespace sunlapse {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 double WrapDeg(double a) {
   a = std::fmod(a, 360.0);

@@ -1,4 +1,5 @@
 #include "sunlapse/tracking/unmodelled_shadows.h"
+#include "sunlapse/common/require.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -8,10 +9,6 @@
 
 namespace sunlapse {
 namespace {
-
-void Require(bool ok, const std::string& message) {
-  if (!ok) throw std::invalid_argument(message);
-}
 
 cv::Mat1f Luminance(const cv::Mat& m) {
   if (m.channels() == 1) return m;

@@ -25,7 +25,16 @@ struct CameraSolveOptions {
 };
 
 struct CameraSolveResult {
-  bool success = false;
+  enum class Status {
+    kSuccess,       // a camera (the message may warn of a large error)
+    kTooFewPoints,  // fewer marked points than the solve needs
+    kNotCoplanar,   // the focal length needs points on one plane
+    kNoFocal,       // the focal length could not be estimated
+    kFailed,        // the solver itself failed
+    kBehindCamera,  // the solution puts marked points behind the camera
+  };
+  Status status = Status::kFailed;
+  bool ok() const { return status == Status::kSuccess; }
   std::string message;
   double focal_px = 0.0;
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();

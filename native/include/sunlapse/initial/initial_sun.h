@@ -74,7 +74,14 @@ struct InitialSunOptions {
 };
 
 struct InitialSunResult {
-  bool success = false;
+  enum class Status {
+    kSuccess,       // a Sun (the message may warn it is poorly determined)
+    kTooFewPixels,  // too few usable pixels see the model
+    kNoLight,       // no light explains the image
+    kCancelled,     // the progress callback asked to stop
+  };
+  Status status = Status::kTooFewPixels;
+  bool ok() const { return status == Status::kSuccess; }
   // Why it failed, or a warning about a poorly determined Sun.
   std::string message;
   // Direction toward the Sun in the world frame; azimuth clockwise from +Y
