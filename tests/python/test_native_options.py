@@ -63,7 +63,8 @@ def test_camera_from_params_or_keywords_is_the_same_camera():
         native.BlenderCameraParams(sensor_fit="DIAGONAL")
 
 
-def test_trackers_take_the_ground_ids_positionally_or_in_the_options():
+def flat_ground_under_a_camera():
+    """A 10 m square of ground and a 64x48 camera 10 m above it, looking down."""
     v = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], dtype=np.float32)
     scene = native.Scene(v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32),
                          np.zeros(2, dtype=np.int32))
@@ -71,6 +72,11 @@ def test_trackers_take_the_ground_ids_positionally_or_in_the_options():
     m[2, 3] = 10.0
     cam = native.Camera.from_blender(lens_mm=35, sensor_width_mm=36, sensor_height_mm=24,
                                      width=64, height=48, matrix_world=m)
+    return scene, cam
+
+
+def test_trackers_take_the_ground_ids_positionally_or_in_the_options():
+    scene, cam = flat_ground_under_a_camera()
     native.ShadowTracker(scene, cam, [0], ignore_top_rows=2)
     native.ShadowTracker(scene, cam, options=native.ShadowTrackerOptions(ground_object_ids=[0]))
     native.ThesisTracker(scene, cam, [0], ignore_top_rows=2)
@@ -86,13 +92,7 @@ def test_stage_results_are_classes_with_a_status_enum_not_dicts():
     assert not isinstance(few, dict)
     assert few.status == native.CameraSolveStatus.TOO_FEW_POINTS
     assert "at least 6" in few.message
-    v = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], dtype=np.float32)
-    scene = native.Scene(v, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32),
-                         np.zeros(2, dtype=np.int32))
-    m = np.eye(4)
-    m[2, 3] = 10.0
-    cam = native.Camera.from_blender(lens_mm=35, sensor_width_mm=36, sensor_height_mm=24,
-                                     width=64, height=48, matrix_world=m)
+    scene, cam = flat_ground_under_a_camera()
     gray = np.full((48, 64), 0.5, dtype=np.float32)
     stopped = native.estimate_initial_sun(scene, cam, gray, progress=lambda f: False)
     assert stopped.status == native.InitialSunStatus.CANCELLED
