@@ -33,6 +33,8 @@ import os
 import signal
 import sys
 
+from .estimate import options as estimate_options
+
 PROG = "run_estimate.py"
 
 EXIT_USAGE = 2
@@ -46,15 +48,17 @@ class _Parser(argparse.ArgumentParser):
         raise CliError(EXIT_USAGE, f"{message} (see --help)")
 
 
-def parse_args(argv):
+def build_parser():
+    """The flags (examples/run_estimate.py's docstring documents each)."""
     p = _Parser(prog=PROG, description="Estimate the Sun on a clip.")
     p.add_argument("--out", required=True, help="track file to write (*.sun.json)")
     p.add_argument("--collection", help="collection holding the model")
     p.add_argument("--ground", nargs="+", default=[], help="ground object name(s)")
     p.add_argument("--frames", help="frame range A:B (scene frames, inclusive)")
-    p.add_argument("--smoothing", choices=["online", "two_pass", "physical"],
+    choices = estimate_options.keys
+    p.add_argument("--smoothing", choices=choices(estimate_options.SMOOTHINGS),
                    default="two_pass")
-    p.add_argument("--method", choices=["thesis", "default"], default="default")
+    p.add_argument("--method", choices=choices(estimate_options.METHODS), default="default")
     p.add_argument("--apply-lamp", action="store_true",
                    help="keyframe a Sun lamp from the track")
     p.add_argument("--save", help="save the .blend here afterwards")
@@ -78,7 +82,11 @@ def parse_args(argv):
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
-    return p.parse_args(argv)
+    return p
+
+
+def parse_args(argv):
+    return build_parser().parse_args(argv)
 
 
 def parse_frames(text, clip):

@@ -131,8 +131,9 @@ class CLIP_OT_sunlapse_cancel(bpy.types.Operator):
 
 
 class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
-    """Estimate the Sun on every frame of the clip: initial Sun on the first
-    frame, shadow tracking on the rest, then smoothing. Esc cancels"""
+    """Estimate the Sun on every frame of the clip: by default the whole clip
+    at once (every frame's shadows scored over the whole sky, one path for
+    the Sun, refined by the shadows), then smoothing. Esc cancels"""
     bl_idname = "clip.sunlapse_estimate"
     bl_label = "Estimate Sun"
     bl_options = {"REGISTER", "UNDO"}
@@ -302,8 +303,13 @@ class CLIP_OT_sunlapse_export(bpy.types.Operator, ExportHelper):
         default="JSON")
 
     def check(self, context):
-        self.filename_ext = {"JSON": ".sun.json", "CSV": ".csv", "GLB": ".glb"}[self.format]
-        return super().check(context)
+        # Not ExportHelper's: it takes only the last dot's part for the
+        # extension, and .sun.json grew with every format switch.
+        self.filename_ext = export.EXTENSIONS[self.format]
+        fixed = export.file_name(self.filepath, self.format)
+        changed = fixed != self.filepath
+        self.filepath = fixed
+        return changed
 
     def execute(self, context):
         track = store.load_track()

@@ -4,6 +4,8 @@ import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty,
                        PointerProperty, StringProperty)
 
+from .estimate import options as estimate_options
+
 
 def _is_camera(self, obj):
     return obj.type == "CAMERA"
@@ -52,8 +54,7 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         description="Sun lamp to drive; empty: a new one is created")
     method: EnumProperty(
         name="Method",
-        items=[("default", "sunlapse", "Our method (dense candidates, albedo, shadows, robust)"),
-               ("thesis", "Thesis", "The thesis's baseline (8 lights + ambient)")],
+        items=[(c.key, c.label, c.description) for c in estimate_options.METHODS],
         default="default")
     ignore_top_rows: IntProperty(
         name="Ignore Top Rows", min=0, default=0,
@@ -61,10 +62,7 @@ class SunlapseSettings(bpy.types.PropertyGroup):
                     "(burned-in time stamps, banners)")
     smoothing: EnumProperty(
         name="Smoothing",
-        items=[("two_pass", "Two-Pass", "Fit the whole clip (best for renders)"),
-               ("online", "Online", "Causal smoothing, as if the clip were playing"),
-               ("physical", "Physical", "Fit the Sun's true path: needs the place, the "
-                                        "date, the first frame's time and the frame interval")],
+        items=[(c.key, c.label, c.description) for c in estimate_options.SMOOTHINGS],
         default="two_pass")
     latitude: FloatProperty(name="Latitude", min=-90, max=90, default=0.0,
                             description="Degrees, north positive")

@@ -9,6 +9,22 @@ import bpy
 from ..core import trackfile
 
 
+# Each export format's file extension (the track's has two parts).
+EXTENSIONS = {"JSON": ".sun.json", "CSV": ".csv", "GLB": ".glb"}
+
+
+def file_name(path: str, fmt: str) -> str:
+    """`path` with the extension of `fmt` in place of any export extension
+    it has: the track's two-part .sun.json is one extension (splitting at the
+    last dot made 'scene.sun.json' 'scene.sun.sun.json')."""
+    lower = path.lower()
+    for ext in sorted(EXTENSIONS.values(), key=len, reverse=True) + [".json"]:
+        if lower.endswith(ext):
+            path = path[:-len(ext)]
+            break
+    return path + EXTENSIONS[fmt]
+
+
 def export_csv(track, path):
     """frame, zenith_deg, azimuth_deg, confidence (one row per frame),
     written atomically (a temporary file in the same folder, renamed)."""

@@ -155,3 +155,10 @@ def test_panel_polls(empty_scene):
     assert bpy.types.VIEW3D_PT_sunlapse.bl_category == "Sun"
     # Apply needs a stored track; Estimate is always offered (it says what is missing).
     assert not bpy.ops.clip.sunlapse_apply_lamp.poll()
+
+
+def test_the_estimate_tooltip_describes_the_default_method():
+    """The tooltip described the thesis's baseline (an initial Sun on the
+    first frame, then tracking), not the whole-clip estimate users get."""
+    doc = bpy.types.CLIP_OT_sunlapse_estimate.__doc__
+    assert "whole clip" in doc and "initial Sun on the first" not in doc

@@ -426,3 +426,20 @@ def test_image_sequence_with_exif_times_runs_in_capture_order_with_physical_smoo
             evaluation.direction(f.zenith_deg, f.azimuth_deg + track.north_offset_deg),
             evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
         assert err < 3.0, (k + 1, err)
+
+
+def test_switching_the_export_format_keeps_one_extension():
+    """Export Sun's file name: the track's two-part .sun.json is one
+    extension. ExportHelper.check cuts the name at its last dot before it
+    adds the extension, which made 'scene.sun.json' grow to
+    'scene.sun.sun.json' with every switch of the format."""
+    from sunlapse.blender import export
+    cut = os.path.splitext("scene.sun.json")[0]  # as ExportHelper.check does
+    assert bpy.path.ensure_ext(cut, ".sun.json") == "scene.sun.sun.json"
+    name = "scene.sun.json"
+    for fmt, want in (("CSV", "scene.csv"), ("JSON", "scene.sun.json"), ("GLB", "scene.glb"),
+                      ("JSON", "scene.sun.json"), ("JSON", "scene.sun.json")):
+        name = export.file_name(name, fmt)
+        assert name == want, (fmt, name)
+    assert export.file_name("/a/take.2.SUN.JSON", "CSV") == "/a/take.2.csv"
+    assert export.file_name("shot.v2", "JSON") == "shot.v2.sun.json"

@@ -103,3 +103,32 @@ def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
         tf.write_track(str(path), bad)
     assert path.read_text() == before
     assert [p.name for p in tmp_path.iterdir()] == ["t.json"]
+
+
+def test_north_comes_from_where_the_track_says():
+    """North fitted from the Sun's circle is not north given by the scene
+    (the panel said "given" for it: only the ephemeris fit counted)."""
+    circle = tf.Track(north_offset_deg=0.1, extra={"sun_circle_fit": {"north_offset_deg": 0.1}})
+    assert circle.north_source() == tf.NorthSource.SUN_CIRCLE and circle.north_known()
+    ephemeris = tf.Track(north_offset_deg=12.0, extra={"sun_path_fit": {"latitude_deg": 43.3}})
+    assert ephemeris.north_source() == tf.NorthSource.EPHEMERIS
+    assert tf.Track(north_offset_deg=35.0).north_source() == tf.NorthSource.GIVEN
+    unknown = tf.Track()
+    assert unknown.north_source() == tf.NorthSource.UNKNOWN and not unknown.north_known()
+
+
+def test_problems_round_trip_and_old_files_read_their_stage_keys(tmp_path):
+    t = tf.Track(frames=[tf.FrameEstimate(frame=1)])
+    t.report("smoothing", tf.ProblemKind.FELL_BACK, "physical fit failed; used two_pass")
+    t.report("model", tf.ProblemKind.HINT, "model the bin")
+    path = str(tmp_path / "p.sun.json")
+    tf.write_track(path, t)
+    d = json.load(open(path))
+    assert d["smoothing_message"] == "physical fit failed; used two_pass"  # older readers
+    back = tf.read_track(path)
+    assert back.problems == t.problems
+    assert [p.is_warning for p in back.problems] == [True, False]
+    del d["problems"]  # a file written before "problems"
+    old = tf.from_json(d)
+    assert old.problem("smoothing").kind == tf.ProblemKind.FELL_BACK
+    assert old.problem("model").kind == tf.ProblemKind.HINT
