@@ -276,14 +276,18 @@ class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         settings.sun_lamp = sun
-        n = len(track.estimated())
-        frames = [f.frame for f in track.estimated()]
-        msg = (f"Keyed '{sun.name}' ({sun.rotation_mode}) on {n} frames "
-               f"({frames[0]}-{frames[-1]})" + (", sky" if settings.sync_sky and keys.sky_node(
-                   context.scene) is not None else "") +
-               (", strength" if settings.keyframe_strength else ""))
+        keyed = list(sun.get(keys.KEYED_FRAMES_PROP, []))
+        sky = keys.sky_node(context.scene) if settings.sync_sky else None
+        msg = (f"Keyed '{sun.name}' ({sun.rotation_mode}) on {len(keyed)} frames "
+               f"({keyed[0]}-{keyed[-1]})" + (", sky" if sky is not None else "")
+               + (", strength" if settings.keyframe_strength else ""))
+        level = "INFO"
+        if settings.sync_sky and sky is None:
+            msg += (". Keyframe Sky is on but the world has no Sky Texture node: only the "
+                    "lamp was keyed")
+            level = "WARNING"
         settings.last_apply = msg
-        self.report({"INFO"}, msg)
+        self.report({level}, msg)
         return {"FINISHED"}
 
 

@@ -17,8 +17,8 @@ def finish_run(context, track, clip, extra):
     store.store_track(track)
     done = len(track.estimated())
     raw = sum(1 for f in track.frames if f.raw_zenith_deg is not None)
-    msg = (f"Sun estimated on {done}/{len(track.frames)} frames "
-           f"({raw} measured, the rest from smoothing)")
+    msg = (f"Sun estimated on {done}/{len(track.frames)} frames ({raw} measured"
+           + (", the rest from smoothing)" if done > raw else ")"))
     # What kept frames from a measurement, in the user's words.
     problems = [p.message for p in track.problems if p.is_warning]
     reasons = Counter(f.reason for f in track.frames if f.raw_zenith_deg is None and f.reason)

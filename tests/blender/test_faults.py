@@ -457,6 +457,43 @@ def test_apply_keys_no_extrapolated_frame(empty_scene):
     assert list(sun[keys.KEYED_FRAMES_PROP]) == [3, 4, 5]
 
 
+def test_apply_says_when_the_sky_it_should_key_is_missing(empty_scene):
+    """Keyframe Sky on a world without a Sky Texture keyed nothing and said
+    nothing; the panel's line now says only the lamp was keyed, on the
+    frames it keyed (the measured span, not every estimated frame)."""
+    from sunlapse.blender import store
+    from sunlapse.core import trackfile
+    frames = [trackfile.FrameEstimate(frame=f, zenith_deg=40.0 + f, azimuth_deg=100.0 + f,
+                                      raw_zenith_deg=40.0 + f if f > 1 else None,
+                                      raw_azimuth_deg=100.0 + f if f > 1 else None,
+                                      confidence=0.9) for f in range(1, 5)]
+    store.store_track(trackfile.Track(frames=frames))
+    settings = bpy.context.scene.sunlapse
+    settings.sync_sky = True
+    assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
+    assert settings.last_apply.startswith("Keyed 'Sun'") and "on 3 frames (2-4)" in \
+        settings.last_apply
+    assert "no Sky Texture node: only the lamp was keyed" in settings.last_apply
+
+
+def test_the_summary_says_the_rest_came_from_smoothing_only_when_some_did(empty_scene):
+    from sunlapse.blender import gather, report
+    from sunlapse.core import trackfile
+
+    def track(measured):
+        return trackfile.Track(method={"options": {}}, frames=[trackfile.FrameEstimate(
+            frame=f, zenith_deg=40.0, azimuth_deg=100.0,
+            raw_zenith_deg=40.0 if f in measured else None,
+            raw_azimuth_deg=100.0 if f in measured else None, confidence=0.9)
+            for f in (1, 2, 3)])
+    clip = gather.ClipInfo(name="c", filepath="/tmp/c.mp4", source="MOVIE", frame_start=1,
+                           frame_duration=3, width=4, height=4, fps=25.0)
+    every = report.finish_run(bpy.context, track({1, 2, 3}), clip, {})
+    assert "(3 measured)" in every and "smoothing" not in every
+    some = report.finish_run(bpy.context, track({1, 3}), clip, {})
+    assert "(2 measured, the rest from smoothing)" in some
+
+
 # ---------------------------------------------------------------------------
 # Ctrl-C and determinism (separate Blenders, on the real March clip)
 
