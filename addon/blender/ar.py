@@ -18,7 +18,7 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from . import gather, job, keys, store
+from . import compat, gather, job, keys, store
 from ..core import angles, arlight
 from ..estimate import errors, frames as clip_frames, notes
 
@@ -128,12 +128,10 @@ def _sky_world(scene):
 
 
 def _clear_keys(id_data, paths):
-    ad = id_data.animation_data
-    if ad is None or ad.action is None:
-        return
-    for fc in list(ad.action.fcurves):
+    curves = compat.fcurves(id_data)
+    for fc in list(curves or ()):
         if fc.data_path in paths:
-            ad.action.fcurves.remove(fc)
+            curves.remove(fc)
 
 
 def measure_balance(context, track, frames):

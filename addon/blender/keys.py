@@ -4,7 +4,7 @@ mode, the sky and the lamp's strength keyed with it."""
 
 import math
 
-from . import lamp
+from . import compat, lamp
 from ..core import angles
 
 KEYED_FRAMES_PROP = "sunlapse_frames"
@@ -13,11 +13,11 @@ KEYED_FRAMES_PROP = "sunlapse_frames"
 def _remove_own_keys(obj, paths, frames):
     """Deletes the keyframes sunlapse put on `paths` at `frames`; the user's
     other keys (other frames, other properties) stay."""
-    ad = obj.animation_data
-    if not ad or not ad.action or not frames:
+    curves = compat.fcurves(obj)
+    if curves is None or not frames:
         return
     frames = set(int(f) for f in frames)
-    for fc in list(ad.action.fcurves):
+    for fc in list(curves):
         if fc.data_path not in paths:
             continue
         for kp in reversed(list(fc.keyframe_points)):
@@ -25,11 +25,11 @@ def _remove_own_keys(obj, paths, frames):
                 fc.keyframe_points.remove(kp, fast=True)
         fc.update()
         if len(fc.keyframe_points) == 0:
-            ad.action.fcurves.remove(fc)
+            curves.remove(fc)
 
 
 def _linear(obj, paths):
-    for fc in obj.animation_data.action.fcurves:
+    for fc in compat.fcurves(obj) or ():
         if fc.data_path in paths:
             for kp in fc.keyframe_points:
                 kp.interpolation = "LINEAR"

@@ -5,7 +5,7 @@ import bpy
 import numpy as np
 import pytest
 
-from sunlapse.blender import lamp
+from sunlapse.blender import compat, lamp
 
 MODES = ["QUATERNION", "AXIS_ANGLE", "XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"]
 DIRECTIONS = [(10, 0), (45, 90), (60, 200), (85, 359), (30, 271), (0.5, 45)]
@@ -39,7 +39,7 @@ def test_keyframes_hold_the_angles_in_every_mode(empty_scene, mode):
     path = lamp.rotation_path(obj)
     for f, (z, a) in enumerate(DIRECTIONS, start=1):
         lamp.point_lamp(obj, z, a, frame=f)
-    fcurves = [fc for fc in obj.animation_data.action.fcurves if fc.data_path == path]
+    fcurves = [fc for fc in compat.fcurves(obj) if fc.data_path == path]
     assert len(fcurves) == {"QUATERNION": 4, "AXIS_ANGLE": 4}.get(mode, 3)
     for f, (z, a) in enumerate(DIRECTIONS, start=1):
         scene.frame_set(f)

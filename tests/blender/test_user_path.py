@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import sunlapse
-from sunlapse.blender import lamp, store
+from sunlapse.blender import compat, lamp, store
 from sunlapse.core import evaluation, trackfile
 from test_addon import run_estimate
 
@@ -60,7 +60,7 @@ def test_keyframes_equal_the_track_in_every_rotation_mode(estimated, mode):
     bpy.context.scene.sunlapse.sun_lamp = sun
     assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
     path = lamp.rotation_path(sun)
-    assert any(fc.data_path == path for fc in sun.animation_data.action.fcurves)
+    assert any(fc.data_path == path for fc in compat.fcurves(sun))
     for f in track.frames:
         err = evaluation.angle_between_deg(lamp_direction(sun, f.frame), track_direction(track, f))
         assert err < 0.01, (mode, f.frame, err)
@@ -78,7 +78,7 @@ def test_second_apply_replaces_own_keys_and_keeps_the_users(estimated):
     sun.keyframe_insert("rotation_euler", frame=100)  # a user key outside the clip
     for _ in range(2):
         assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
-    fcs = {(fc.data_path, fc.array_index): fc for fc in sun.animation_data.action.fcurves}
+    fcs = {(fc.data_path, fc.array_index): fc for fc in compat.fcurves(sun)}
     rot = fcs[("rotation_euler", 0)]
     frames = sorted(int(k.co.x) for k in rot.keyframe_points)
     assert frames == [1, 2, 3, 100]                   # no duplicates, user key kept
@@ -243,7 +243,7 @@ def test_strength_follows_the_measured_sun_ambient_ratio(estimated):
     scene.sunlapse.keyframe_strength = True
     for _ in range(2):  # a second run replaces its own keys
         assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
-    fc = [fc for fc in sun.data.animation_data.action.fcurves if fc.data_path == "energy"]
+    fc = [fc for fc in compat.fcurves(sun.data) if fc.data_path == "energy"]
     assert len(fc) == 1 and len(fc[0].keyframe_points) == len(track.frames)
     median = sorted(ratios.values())[len(ratios) // 2]
     for f, r in ratios.items():
@@ -287,7 +287,7 @@ def test_ar_setup_keys_lamp_and_sky_from_the_footage_and_keeps_helpers_out_of_sh
     assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
     assert bpy.ops.clip.sunlapse_setup_ar() == {"FINISHED"}
     sun = scene.sunlapse.sun_lamp
-    fcurves = {fc.data_path for fc in sun.data.animation_data.action.fcurves}
+    fcurves = {fc.data_path for fc in compat.fcurves(sun.data)}
     assert {"energy", "color"} <= fcurves
     assert scene.world.name == ar.WORLD_NAME
     bg = next(n for n in scene.world.node_tree.nodes if n.type == "BACKGROUND")
