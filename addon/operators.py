@@ -13,7 +13,7 @@ from .blender import ar, export, gather, job, keys, lamp, place, report, store
 from .blender.background import RUN, redraw_all, running
 from .estimate import errors, frames as clip_frames, native_loader, thesis
 from .estimate import options as estimate_options, run as estimate_run
-from .core import clock, trackfile
+from .core import angles, clock, trackfile
 
 
 class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
@@ -394,7 +394,7 @@ class CLIP_OT_sunlapse_to_sun_position(bpy.types.Operator):
         written = ["place"]
         sp.latitude, sp.longitude = lat, lon
         if track is not None and track.north_known():
-            sp.north_offset = math.radians(((track.north_offset_deg + 180.0) % 360.0) - 180.0)
+            sp.north_offset = math.radians(angles.wrap_signed_deg(track.north_offset_deg))
             written.append("north")
         try:
             when = report.frame_time_utc(settings, track, scene.frame_current)

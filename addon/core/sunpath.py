@@ -162,9 +162,10 @@ def _fit(times, z_obs, a_obs, w, use, sun_position, latitude_deg, longitude_deg,
     if not np.all(np.isfinite(p)):
         return PathFit(False, "the fit diverged")
     full = model(lat, dt_s, range(len(times)))
-    fit = PathFit(True, "", float(lat), float(longitude_deg), float(dt_s), float(north) % 360.0,
-                  float(np.sqrt(np.median(e ** 2))), [float(v) for v in full[:, 0]],
-                  [float(v) % 360.0 for v in full[:, 1]])
+    fit = PathFit(True, "", float(lat), float(longitude_deg), float(dt_s),
+                  angles.wrap_azimuth_deg(float(north)), float(np.sqrt(np.median(e ** 2))),
+                  [float(v) for v in full[:, 0]],
+                  [float(angles.wrap_azimuth_deg(v)) for v in full[:, 1]])
     if fit.rms_deg > 2.0:
         fit.message = (f"the raw angles do not follow a Sun path well (median residual "
                        f"{fit.rms_deg:.1f} deg): check date, time and place")
