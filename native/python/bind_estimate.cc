@@ -478,7 +478,7 @@ void BindEstimate(py::module_& m) {
                          const_cast<void*>(bgr.data()));
         return MatAsArray(ToLinearGray(in, gamma));
       },
-      py::arg("image").noconvert(), py::arg("gamma") = 2.2,
+      py::arg("image").noconvert(), py::arg("gamma") = kDisplayGamma,
       "uint8 (H,W,3) BGR -> float32 (H,W) linear gray in [0,1] (value^gamma).");
 
   m.def(

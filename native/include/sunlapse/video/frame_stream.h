@@ -19,7 +19,7 @@ struct FrameStreamOptions {
   // Decoded frames waiting for the consumer at most.
   int queue_frames = 3;
   // Linear gray is value^gamma (ToLinearGray).
-  double gamma = 2.2;
+  double gamma = kDisplayGamma;
   // Also hand out the 8-bit BGR frame (for a colour background), scaled to
   // bgr_width x bgr_height as it is converted (0 x 0: the decoded size).
   bool keep_bgr = false;

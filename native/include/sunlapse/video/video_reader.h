@@ -14,6 +14,10 @@
 
 namespace sunlapse {
 
+// The display gamma footage is encoded with (sRGB's, about 2.2): the
+// estimate's shading model is linear, so 8-bit values are raised to it.
+inline constexpr double kDisplayGamma = 2.2;
+
 // What became of one frame that Read() returned.
 enum class FrameStatus {
   kOk = 0,
@@ -122,7 +126,7 @@ cv::Mat AreaReduced(const cv::Mat& image, cv::Size size);
 
 // 8-bit BGR (or gray) -> single-channel float32 in [0, 1], with the display
 // gamma undone (value^gamma; gamma 1 keeps the encoded values).
-cv::Mat ToLinearGray(const cv::Mat& image, double gamma = 2.2);
+cv::Mat ToLinearGray(const cv::Mat& image, double gamma = kDisplayGamma);
 
 // ToLinearGray's 8-bit value -> linear float table (1 x 256, CV_32F), for
 // cv::LUT: a table of the 256 values, as pow() per pixel cost more than
