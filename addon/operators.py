@@ -453,7 +453,11 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         if r.status != native.CameraSolveStatus.SUCCESS:
             extra = (f" (tracks without coordinates in their names: {', '.join(skipped)})"
                      if skipped else "")
-            self.report({"ERROR"}, r.message + extra)
+            msg = r.message + extra + (
+                ". Name each marker's track after the point's ground coordinates in metres, "
+                "x y [z]: 'foot 0 0', 'corner 2.5 1.2 0'")
+            scene.sunlapse.last_report = f"Solve Camera failed: {msg}"
+            self.report({"ERROR"}, msg)
             return {"CANCELLED"}
         cam_obj = scene.sunlapse.camera or scene.camera
         if cam_obj is None:
@@ -478,9 +482,12 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
         scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
         worst = max(zip(r.errors_px, [p[0] for p in points]))
         level = "WARNING" if r.message else "INFO"
-        self.report({level}, f"Camera solved from {len(points)} points: lens {cam.lens:.1f} mm, "
-                             f"reprojection {r.rms_px:.2f} px RMS (worst {worst[0]:.2f} px at "
-                             f"'{worst[1]}')" + (f": {r.message}" if r.message else ""))
+        msg = (f"Camera solved from {len(points)} points: lens {cam.lens:.1f} mm, reprojection "
+               f"{r.rms_px:.2f} px RMS (worst {worst[0]:.2f} px at '{worst[1]}')"
+               + (f": {r.message}" if r.message else ""))
+        # Kept in the Scene panel, as Blender's Solve panel keeps its error.
+        scene.sunlapse.last_report = msg
+        self.report({level}, msg)
         return {"FINISHED"}
 
 

@@ -278,8 +278,38 @@ def _make_classes():
     return tuple(out)
 
 
-classes = _make_classes()
+# The operators in the order of the work, as the Movie Clip Editor's Track
+# menu shows them (and so F3's menu search finds them), the way Blender's
+# own motion-tracking tools sit there.
+MENU_OPERATORS = ("clip.sunlapse_solve_camera", "clip.sunlapse_check_scene",
+                  "clip.sunlapse_estimate", "clip.sunlapse_initial_sun",
+                  "clip.sunlapse_apply_lamp", "clip.sunlapse_setup_ar",
+                  "clip.sunlapse_to_sun_position", "clip.sunlapse_export")
+
+
+class CLIP_MT_sunlapse(bpy.types.Menu):
+    bl_idname = "CLIP_MT_sunlapse"
+    bl_label = "Sun (sunlapse)"
+
+    def draw(self, context):
+        for idname in MENU_OPERATORS:
+            self.layout.operator(idname)
+
+
+def draw_track_menu(self, context):
+    self.layout.separator()
+    self.layout.menu(CLIP_MT_sunlapse.bl_idname, icon="LIGHT_SUN")
+
+
+classes = _make_classes() + (CLIP_MT_sunlapse,)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 
-register, unregister = _register, _unregister
+def register():
+    _register()
+    bpy.types.CLIP_MT_track.append(draw_track_menu)
+
+
+def unregister():
+    bpy.types.CLIP_MT_track.remove(draw_track_menu)
+    _unregister()

@@ -162,3 +162,26 @@ def test_the_estimate_tooltip_describes_the_default_method():
     first frame, then tracking), not the whole-clip estimate users get."""
     doc = bpy.types.CLIP_OT_sunlapse_estimate.__doc__
     assert "whole clip" in doc and "initial Sun on the first" not in doc
+
+
+def test_every_operator_sits_in_the_clip_editors_track_menu():
+    """Operators in no menu are not found by F3 (it searches menus): they sit
+    in Track › Sun (sunlapse), as Blender's own tracking tools sit there."""
+    from sunlapse import operators, panels
+    assert panels.draw_track_menu in bpy.types.CLIP_MT_track._dyn_ui_initialize()
+
+    class Layout:  # records what the menu draws
+        def __init__(self):
+            self.ops = []
+
+        def operator(self, idname, **_):
+            self.ops.append(idname)
+    menu = Layout()
+    panels.CLIP_MT_sunlapse.draw(types_namespace(menu), bpy.context)
+    ours = {c.bl_idname for c in operators.classes if c.bl_idname != "clip.sunlapse_cancel"}
+    assert set(menu.ops) == ours, ours ^ set(menu.ops)
+
+
+def types_namespace(layout):
+    import types
+    return types.SimpleNamespace(layout=layout)

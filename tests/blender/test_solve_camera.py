@@ -36,6 +36,9 @@ def test_solve_camera_recovers_the_camera(empty_scene, tmp_path):
     assert cam is not None and cam.data.lens == pytest.approx(32.0, rel=2e-3)
     assert (cam.matrix_world.translation - truth_matrix.translation).length < 5e-3
     assert (cam.matrix_world.col[2].xyz - truth_matrix.col[2].xyz).length < 1e-3
+    # The lens and the error stay in the panel once the report is gone.
+    report = scene.sunlapse.last_report
+    assert report.startswith("Camera solved from 12 points: lens 32.0 mm") and "px RMS" in report
 
 
 def test_solve_camera_explains_what_is_missing(empty_scene, tmp_path):
@@ -44,5 +47,6 @@ def test_solve_camera_explains_what_is_missing(empty_scene, tmp_path):
     clip = scenes.load_clip(scene, scenes.write_frames(str(tmp_path / "f"), width=320, height=240))
     truth = scenes.add_camera(scene, (0.4, -4.0, 3.0), (0, 0.5, 0), lens=32.0, name="Truth")
     mark(clip, scene, truth, ground_points()[:4] + [("no numbers here", (2, 2, 0))])
-    with pytest.raises(RuntimeError, match="at least 6.*no numbers here"):
+    with pytest.raises(RuntimeError, match="at least 6.*no numbers here.*'foot 0 0'"):
         bpy.ops.clip.sunlapse_solve_camera()
+    assert "Name each marker's track" in scene.sunlapse.last_report
