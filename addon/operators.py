@@ -43,8 +43,17 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
                f"'{cam.name}'; clip '{clip.name}' {clip.width}x{clip.height}, "
                f"frames {clip.frame_start}-{clip.frame_end}; ground: "
                f"{', '.join(ground) or 'none found'}")
+        level = "INFO"
+        doubts = gather.ground_doubts(model, ground) if ground else [
+            "No ground in view: model the surface the shadows fall on (a plane under the "
+            "objects) and pick it as Ground"]
+        if doubts:
+            # A lone object (the default cube) casts its shadow on nothing
+            # modelled: its own top was taken for the ground.
+            msg += ". " + "; ".join(doubts)
+            level = "WARNING"
         settings.last_report = msg
-        self.report({"INFO"}, msg)
+        self.report({level}, msg)
         return {"FINISHED"}
 
 

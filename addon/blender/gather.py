@@ -210,6 +210,37 @@ def guess_ground(model: Model, camera=None) -> List[str]:
     return [model.names[i] for i in keep]
 
 
+def ground_doubts(model: Model, names: Sequence[str]) -> List[str]:
+    """Warnings, one per ground object that cannot be much of a ground: most
+    of its surface is not horizontal (a box's or a bollard's top taken for
+    the ground, when the real ground is not modelled)."""
+    v = model.vertices.astype(np.float64)
+    t = model.triangles
+    if len(t) == 0 or not np.all(np.isfinite(v)):
+        return []
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    cross = np.cross(b - a, c - a)
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    flat = np.abs(cross[:, 2]) / np.maximum(2 * area, 1e-12) > 0.95
+    n = len(model.names)
+    flat_area = np.bincount(model.object_ids, weights=area * flat, minlength=n)
+    total = np.maximum(np.bincount(model.object_ids, weights=area, minlength=n), 1e-12)
+    out = []
+    for name in names:
+        if name not in model.names:
+            continue
+        share = flat_area[model.names.index(name)] / total[model.names.index(name)]
+        if share < GROUND_MIN_FLAT_SHARE:
+            out.append(f"'{name}' is taken for the ground, but only {100 * share:.0f}% of it is "
+                       f"horizontal (the top of an object?): model the surface the shadows fall "
+                       f"on (a plane under the objects) and pick it as Ground")
+    return out
+
+
+# A ground is mostly horizontal: a box's top and bottom are a third of it.
+GROUND_MIN_FLAT_SHARE = 0.6
+
+
 # --------------------------------------------------------------------------
 # Camera
 

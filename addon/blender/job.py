@@ -144,7 +144,7 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
             track_extra["gps_deg"] = list(gps)
     if options.smoothing == "physical":
         place_and_time(context, settings, options, gps, place)
-    for w in cam.warnings:
+    for w in cam.warnings + gather.ground_doubts(model, names):
         if warnings is None:  # scripted runs: on stdout with the run's other warnings
             print(f"sunlapse: warning: {w}")
         else:

@@ -38,6 +38,20 @@ def test_check_scene_operator_reports_a_valid_scene(empty_scene, tmp_path):
     assert "ground: Ground" in scene.sunlapse.last_report
 
 
+def test_check_scene_warns_about_a_model_with_no_ground(empty_scene, tmp_path):
+    """A lone box (the default cube) and a camera: Check Scene said all was
+    well; Estimate Sun then stopped at "no ground"."""
+    scene = empty_scene
+    scene.render.resolution_x, scene.render.resolution_y = 64, 48
+    scenes.add_box_on_plane(scene)
+    bpy.data.objects.remove(bpy.data.objects["Ground"])
+    scenes.add_camera(scene, (0, -12, 6), (0, 0, 0))
+    scenes.load_clip(scene, scenes.write_frames(str(tmp_path / "f")))
+    assert bpy.ops.clip.sunlapse_check_scene() == {"FINISHED"}
+    report = scene.sunlapse.last_report
+    assert "'Box' is taken for the ground, but only 33% of it is horizontal" in report
+
+
 def test_check_scene_operator_cancels_without_camera(empty_scene, tmp_path):
     scenes.add_box_on_plane(empty_scene)
     scenes.load_clip(empty_scene, scenes.write_frames(str(tmp_path / "f")))
@@ -185,3 +199,10 @@ def test_every_operator_sits_in_the_clip_editors_track_menu():
 def types_namespace(layout):
     import types
     return types.SimpleNamespace(layout=layout)
+
+
+def test_a_scripted_run_warns_when_an_objects_top_is_taken_for_the_ground(empty_scene, tmp_path):
+    """The ground named (or found) is a box: the run says so, naming it."""
+    blend = make_blend(tmp_path)
+    proc = run_estimate(blend, str(tmp_path / "t.sun.json"), "--ground", "Box")
+    assert "sunlapse: warning: 'Box' is taken for the ground" in proc.stdout
