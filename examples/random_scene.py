@@ -9,7 +9,7 @@ azimuth)` callable (UTC; `_native.sun_position`), so drawing is exactly
 reproducible and checks (shadows in view, sunlit floor in view) use the same
 ephemeris as the render.
 
-World frame as everywhere in sunlapse (DESIGN.md §2): +Z up, +Y is the scene's
+World frame as everywhere in sunlapse (docs/design.md §4): +Z up, +Y is the scene's
 "north", azimuth_world = azimuth_geographic + north_offset.
 """
 

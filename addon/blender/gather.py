@@ -337,7 +337,7 @@ def build_camera(info: CameraInfo):
 
 def scene_north_offset_deg(context) -> float:
     """North offset of Blender's Sun Position add-on when it is enabled
-    (world azimuth = azimuth + north offset, DESIGN.md §2), else 0."""
+    (world azimuth = azimuth + north offset, docs/design.md §4), else 0."""
     props = getattr(context.scene, "sun_pos_properties", None)
     if props is None:
         return 0.0

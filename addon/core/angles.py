@@ -1,5 +1,5 @@
 """The Sun's angles and its direction, one helper for the Python side
-(native/include/sunlapse/common/angles.h is the C++ one; DESIGN.md §2).
+(native/include/sunlapse/common/angles.h is the C++ one; docs/design.md §4).
 
 World frame: Blender's, +X east, +Y north (of the scene), +Z up. Zenith from
 +Z toward the Sun; azimuth clockwise from +Y toward +X; degrees. A geographic

@@ -7,7 +7,7 @@ errors: 1 deg of longitude = 4 min) and the scene's north offset to the raw
 per-frame angles, robustly and weighted by confidence, with weak priors that
 keep the user's values where the clip cannot tell (a short clip barely
 separates latitude from time). The fitted path then gives every frame's Sun,
-with geographic azimuths and the fitted north offset (DESIGN.md §3).
+with geographic azimuths and the fitted north offset (docs/track-format.md).
 
 bpy- and native-free: the ephemeris comes in as a function, so tests can use
 an independent one.

@@ -1,4 +1,4 @@
-"""The track file (``*.sun.json``, DESIGN.md §3): writer and reader.
+"""The track file (``*.sun.json``, docs/track-format.md): writer and reader.
 
 bpy-free so that scripted runs, the evaluation tools and tests share it.
 Angles are degrees; ``azimuth_deg`` is clockwise from north (or from the

@@ -1,6 +1,6 @@
 """The Sun's circle about the pole, fitted so that a run of wrong Suns does
 not bend it (bpy-free, numpy only). Used by the whole-clip path's prior
-(estimate/whole_clip.py) and the off-circle confidence check (pipeline.py).
+(estimate/whole_clip.py) and the off-circle confidence check (the same file).
 
 A plain least-squares fit, even with Huber weights (core/suncircle.py), is
 pulled several degrees by a third of a segment's Suns lying to one side of

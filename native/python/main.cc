@@ -1,4 +1,4 @@
-// The _native module: thin bindings of the native stages (DESIGN.md §1).
+// The _native module: thin bindings of the native stages (docs/design.md §2).
 #include <pybind11/pybind11.h>
 
 namespace py = pybind11;

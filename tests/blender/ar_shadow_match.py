@@ -64,7 +64,7 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     """Runs the artist's path on preset_dir/scene.blend and measures frame
     `frame`; returns a dict of per-channel ratios (insert, real) and counts."""
     from sunlapse.blender import gather, job, lamp
-    from sunlapse.estimate import notes as acquire
+    from sunlapse.estimate import notes
     from sunlapse.core import arlight, trackfile
     bpy.ops.wm.open_mainfile(filepath=os.path.join(preset_dir, "scene.blend"))
     import run_estimate  # noqa: F401  (examples/ on sys.path)
@@ -106,8 +106,8 @@ def render_and_measure(preset_dir, frame, work, samples=32, estimate=True):
     t = truth.frame(mask_frame)
     sun = tuple(float(v) for v in lamp.sun_vector(t.zenith_deg,
                                                   t.azimuth_deg + truth.north_offset_deg))
-    ground, _ = acquire.ground_and_model_shadow(gather.build_scene(model), gather.build_camera(cam),
-                                                ids, sun)
+    ground, _ = notes.ground_and_model_shadow(gather.build_scene(model), gather.build_camera(cam),
+                                              ids, sun)
     ground = (ground > 0) & free & ~arlight.dilate(shade, 1)
     dark = arlight.erode(real_shadow, 1) & ground
     band = max(4, round(ground.shape[1] / 25))

@@ -1,5 +1,5 @@
-// The Sun's angles and its direction, one helper for all stages (DESIGN.md §2).
-// World frame: Blender's, +X east, +Y north (of the scene), +Z up. Zenith
+// The Sun's angles and its direction, one helper for all stages (docs/design.md
+// §4). World frame: Blender's, +X east, +Y north (of the scene), +Z up. Zenith
 // from +Z toward the Sun; azimuth clockwise from +Y toward +X. A geographic
 // azimuth is measured from true north; a scene whose +Y is turned from north
 // by north_offset (Blender's Sun Position add-on) has

@@ -3,7 +3,7 @@
 // Built on ERFA (the IAU SOFA algorithms): the Earth's heliocentric position
 // and velocity (VSOP-based eraEpv00 inside eraApco13), annual aberration,
 // precession-nutation, Earth rotation, polar motion left at zero, and the
-// refraction model of eraRefco. Angles follow DESIGN.md §2: zenith from +Z
+// refraction model of eraRefco. Angles follow docs/design.md §4: zenith from +Z
 // (up), azimuth clockwise from north toward east, degrees.
 #pragma once
 

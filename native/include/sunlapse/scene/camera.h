@@ -1,9 +1,9 @@
 // Pinhole camera built from what Blender knows about a camera.
 //
-// Frames (DESIGN.md §2): the world is Blender's (+Z up, metres). Inside this
-// class the camera frame is OpenCV's: x right, y down, z forward (Blender's
-// camera looks along its local -Z with +Y up, so cam = diag(1,-1,-1) * local).
-// Pixels are OpenCV's: (0,0) is the centre of the top-left pixel.
+// Frames (docs/design.md §4): the world is Blender's (+Z up, metres). Inside
+// this class the camera frame is OpenCV's: x right, y down, z forward
+// (Blender's camera looks along its local -Z with +Y up, so cam = diag(1,-1,-1)
+// * local). Pixels are OpenCV's: (0,0) is the centre of the top-left pixel.
 #pragma once
 
 #include <optional>
@@ -51,7 +51,7 @@ struct PolynomialDistortion {
   double focal_x_px = 1.0;
   double focal_y_px = 1.0;
   // Principal point in OpenCV pixels (Blender stores it from the bottom-left
-  // corner; the bridge converts).
+  // corner; the glue, addon/blender/gather.py, converts).
   double principal_x_px = 0.0;
   double principal_y_px = 0.0;
   double k1 = 0.0, k2 = 0.0, k3 = 0.0;

@@ -2,14 +2,14 @@
 unmodelled-shadow note."""
 import numpy as np
 
-from sunlapse.estimate import notes as acquire
+from sunlapse.estimate import notes
 
 
 def test_spread_takes_the_ends_and_never_more_than_asked():
     frames = list(range(10, 110))
-    picks = acquire.spread(frames, 5)
+    picks = notes.spread(frames, 5)
     assert picks[0] == 10 and picks[-1] == 109 and len(picks) == 5
-    assert acquire.spread([3, 4], 24) == [3, 4]
+    assert notes.spread([3, 4], 24) == [3, 4]
 
 
 def test_clip_background_is_the_median_so_a_moving_shadow_vanishes():
@@ -19,7 +19,7 @@ def test_clip_background_is_the_median_so_a_moving_shadow_vanishes():
         f = base.copy()
         f[:, 2 * k:2 * k + 2] = 40  # a shadow that moves along the rows
         frames.append(f)
-    back = acquire.clip_background(frames, rows_per_chunk=3)
+    back = notes.clip_background(frames, rows_per_chunk=3)
     assert np.array_equal(back, base)
-    assert acquire.clip_background(frames[:2]) is None
-    assert acquire.clip_background([frames[0], None, frames[1]]) is None
+    assert notes.clip_background(frames[:2]) is None
+    assert notes.clip_background([frames[0], None, frames[1]]) is None
