@@ -165,6 +165,21 @@ def gather_model(context, collection: Optional[bpy.types.Collection] = None,
                  names=names)
 
 
+def _triangle_areas(model: Model):
+    """Per triangle: area, whether it is horizontal (normal within 18 deg of
+    vertical, whichever way it is wound) and mean height; None for no
+    triangles or a non-finite vertex."""
+    v = model.vertices.astype(np.float64)
+    t = model.triangles
+    if len(t) == 0 or not np.all(np.isfinite(v)):
+        return None
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    cross = np.cross(b - a, c - a)
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    flat = np.abs(cross[:, 2]) / np.maximum(2 * area, 1e-12) > 0.95
+    return area, flat, (a[:, 2] + b[:, 2] + c[:, 2]) / 3.0
+
+
 def guess_ground(model: Model, camera=None) -> List[str]:
     """The ground the shadows fall on (overridable by the user): the lowest
     large horizontal surface, below the camera when it is given (a
@@ -179,16 +194,11 @@ def guess_ground(model: Model, camera=None) -> List[str]:
     below the ground does not win), the lowest of them by area-weighted
     height is chosen, and other mostly-flat objects about as low and at
     least half as large (tiles, lawns) are kept with it."""
-    v = model.vertices.astype(np.float64)
-    t = model.triangles
-    if len(t) == 0 or not np.all(np.isfinite(v)):
+    triangles = _triangle_areas(model)
+    if triangles is None:
         return []
-    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
-    cross = np.cross(b - a, c - a)
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    nz = np.abs(cross[:, 2]) / np.maximum(2 * area, 1e-12)
-    height = (a[:, 2] + b[:, 2] + c[:, 2]) / 3.0
-    flat = nz > 0.95
+    area, flat, height = triangles
+    v = model.vertices.astype(np.float64)
     if isinstance(camera, CameraInfo):
         camera = np.asarray(camera.params["matrix_world"], dtype=np.float64)[:3, 3]
     if camera is not None and np.all(np.isfinite(camera)):
@@ -214,14 +224,10 @@ def ground_doubts(model: Model, names: Sequence[str]) -> List[str]:
     """Warnings, one per ground object that cannot be much of a ground: most
     of its surface is not horizontal (a box's or a bollard's top taken for
     the ground, when the real ground is not modelled)."""
-    v = model.vertices.astype(np.float64)
-    t = model.triangles
-    if len(t) == 0 or not np.all(np.isfinite(v)):
+    triangles = _triangle_areas(model)
+    if triangles is None:
         return []
-    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
-    cross = np.cross(b - a, c - a)
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    flat = np.abs(cross[:, 2]) / np.maximum(2 * area, 1e-12) > 0.95
+    area, flat, _ = triangles
     n = len(model.names)
     flat_area = np.bincount(model.object_ids, weights=area * flat, minlength=n)
     total = np.maximum(np.bincount(model.object_ids, weights=area, minlength=n), 1e-12)
