@@ -67,7 +67,7 @@ ENCODER = ["-c:v", "libx264", "-preset", "fast", "-crf", "23", "-pix_fmt", "yuv4
 # phones write their time-lapse movies; 250 is ffmpeg's own default, what a
 # movie made from stills with a plain ffmpeg command has. The estimate reads
 # its reference frames spread over the clip at key frames when there are
-# enough of them (see README: Speed).
+# enough of them (see docs/performance.md).
 GOP = 25
 # Timing keys that are paid once per run, before the per-frame loop (the
 # whole-clip estimator's sky table and reference; the thesis method's initial

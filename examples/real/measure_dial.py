@@ -26,7 +26,7 @@ white, brightest) point across it, robustly, and each arc locally by a
 quadratic; their crossings become the marked points, named as the add-on's
 camera solve reads them ("eq10 -0.7933 0.9424").
 
-Found here (see examples/real/README.md): the camera stands north of the dial
+Found here (see docs/accuracy.md, Real footage): the camera stands north of the dial
 looking south (the picture is upright because the camera is rolled 180 deg),
 not south of it; the solve says so without being told.
 """

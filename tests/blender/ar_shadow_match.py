@@ -9,7 +9,7 @@ inserts' alpha written beside it as EXR. Per channel, in display values:
   real:    plate in the real cast shadows (the generator's truth mask)
            over the plate on the lit ground within a few pixels of them
 
-Used by test_user_path.py; prints the README's figures when run as
+Used by test_user_path.py; prints the figures in docs/accuracy.md when run as
   blender -b --factory-startup --python tests/blender/ar_shadow_match.py -- PRESET_DIR [FRAME]
 """
 import os

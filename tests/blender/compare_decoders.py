@@ -1,5 +1,5 @@
 """The clip as Blender's compositor shows it against the frame the estimate
-reads (OpenCV), per channel, in 8-bit display levels:
+reads (FFmpeg), per channel, in 8-bit display levels:
 
   blender -b --factory-startup --python tests/blender/compare_decoders.py -- CLIP [FRAME] [VIEW]
 

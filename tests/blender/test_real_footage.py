@@ -49,7 +49,7 @@ def test_march_clip_follows_the_ephemeris(tmp_path, native):
     assert r.frames_estimated >= 38
     # Every raw frame, confident or not. Measured 0.67 mean / 2.29 max
     # azimuth and 2.57 mean zenith (the dial's own +2-3.6 deg bias, see
-    # README); bounds leave room, not the targets.
+    # docs/accuracy.md); bounds leave room, not the targets.
     assert r.azimuth.mean < 1.5 and r.azimuth.max < 3.0
     assert r.zenith.mean < 4.0
     # Frame 1 (18:08) is stored first but taken last: tracked in capture
@@ -73,7 +73,7 @@ def test_march_clip_physical_smoothing_stays_near_the_target(tmp_path, native):
     # Measured 2.05-2.09 / 3.23-3.29 zenith, 1.22-1.25 / 2.23-2.28 azimuth
     # (mean / max) with the whole-clip estimator (1.95 zenith mean before
     # it): the target (mean 2) is missed by 0.05-0.09 deg on zenith, the dial
-    # model's own +2-4 deg bias around noon (README); the bound holds the
+    # model's own +2-4 deg bias around noon (docs/accuracy.md); the bound holds the
     # result near it.
     assert r.frames_estimated == 40
     assert r.zenith.mean < 2.2 and r.azimuth.mean < 2.0
