@@ -2,14 +2,13 @@
 estimate; errors go to self.report, never a traceback."""
 
 import datetime as dt
-import threading
 import time
 
 import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from .blender import ar, export, gather, job, keys, lamp, place, report, store
+from .blender import ar, background, export, gather, job, keys, lamp, place, report, store
 from .blender.background import RUN, redraw_all, running
 from .estimate import errors, frames as clip_frames, native_loader, thesis
 from .estimate import options as estimate_options, run as estimate_run
@@ -188,25 +187,11 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             return {"CANCELLED"}
         RUN.update(running=True, fraction=0.0, cancel=False, outcome=None, thread=None,
                    tick=time.monotonic())
-        self._result = None
-        self._error = None
-
         run = self._job
-
-        def work():
-            def progress(fraction):
-                RUN["fraction"] = fraction
-                return not RUN["cancel"]
-            try:
-                self._result = estimate_run.run(run.scene, run.camera, run.clip.filepath,
-                                                run.clip.frame_start, run.frames, run.options,
-                                                progress)
-            except Exception as e:  # reported on the main thread
-                self._error = e
-
-        self._thread = threading.Thread(target=work, name="sunlapse-estimate", daemon=True)
-        self._thread.start()
-        RUN["thread"] = self._thread
+        self._worker = background.Worker(
+            lambda progress: estimate_run.run(run.scene, run.camera, run.clip.filepath,
+                                              run.clip.frame_start, run.frames, run.options,
+                                              progress))
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.1, window=context.window)
@@ -236,14 +221,15 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         if context.workspace:  # the status bar shows the bar and a cancel button
             context.workspace.status_text_set(draw_status_progress)
         redraw_all()
-        if self._thread.is_alive():
+        if self._worker.alive():
             return {"PASS_THROUGH"}
         self._end(context)
-        stopped = isinstance(self._error, errors.Cancelled)
-        if self._error is not None and not stopped:
-            RUN["outcome"] = f"failed: {type(self._error).__name__}: {self._error}"
-            self.report({"ERROR"}, f"Estimate failed: {self._error}")
-            context.scene.sunlapse.last_report = f"Estimate failed: {self._error}"
+        error = self._worker.error
+        stopped = isinstance(error, errors.Cancelled)
+        if error is not None and not stopped:
+            RUN["outcome"] = f"failed: {type(error).__name__}: {error}"
+            self.report({"ERROR"}, f"Estimate failed: {error}")
+            context.scene.sunlapse.last_report = f"Estimate failed: {error}"
             return {"CANCELLED"}
         if stopped or RUN["cancel"]:
             # stopped: the worker saw the cancel and gave up; else it had
@@ -252,13 +238,28 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
             self.report({"INFO"}, "Estimate cancelled; nothing was changed")
             return {"CANCELLED"}
         RUN["outcome"] = "finished"
-        self.report(report.report_level(self._result),
-                    report.finish_run(context, self._result, self._job.clip, self._job.record))
+        track = self._worker.result
+        self.report(report.report_level(track),
+                    report.finish_run(context, track, self._job.clip, self._job.record))
         return {"FINISHED"}
 
     def cancel(self, context):  # Blender closes the window / file
-        RUN["cancel"] = True
+        background.file_closed()
         self._end(context)
+
+
+class CLIP_OT_sunlapse_notice(bpy.types.Operator):
+    """Shows a message in the status bar (what happened to a run whose file
+    was closed; only operators can report)"""
+    bl_idname = "clip.sunlapse_notice"
+    bl_label = "sunlapse Notice"
+    bl_options = {"INTERNAL"}
+
+    message: bpy.props.StringProperty()
+
+    def execute(self, context):
+        self.report({"WARNING"}, self.message)
+        return {"FINISHED"}
 
 
 class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
@@ -503,14 +504,18 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
 classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene,
            CLIP_OT_sunlapse_initial_sun, CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_cancel,
            CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export, CLIP_OT_sunlapse_setup_ar,
-           CLIP_OT_sunlapse_to_sun_position)
+           CLIP_OT_sunlapse_to_sun_position, CLIP_OT_sunlapse_notice)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 
 def register():
     _register()
+    if background.tell_after_load not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(background.tell_after_load)
 
 
 def unregister():
     RUN.update(running=False, cancel=True)
+    if background.tell_after_load in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(background.tell_after_load)
     _unregister()

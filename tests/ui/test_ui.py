@@ -86,6 +86,21 @@ def test_esc_cancels_and_changes_nothing(scene, tmp_path):
     assert json.loads(r.get("outcome", "null")) == "cancelled", proc.stdout[-2000:]
 
 
+def test_closing_the_file_mid_run_stops_it_and_says_so(scene, tmp_path):
+    # The worker used to write its result on the operator, freed with the
+    # file: an uncaught ReferenceError from the thread, and no word to the user.
+    proc = blender_ui(fresh_copy(scene, tmp_path), "--python",
+                      os.path.join(HERE, "ui_script.py"), "--", "close", str(tmp_path / "x"))
+    r = results(proc)
+    text = proc.stdout + proc.stderr
+    assert r.get("invoke") == "{'RUNNING_MODAL'}", text[-3000:]
+    assert r.get("loaded") == "True" and r.get("worker_alive") == "False", text[-3000:]
+    assert json.loads(r["outcome"]) == "cancelled: the file was closed"
+    assert "Traceback" not in text and "ReferenceError" not in text, text[-3000:]
+    assert "Estimate Sun stopped: its file was closed" in text
+    assert r.get("notice_left") == "False"   # shown after the load, not kept
+
+
 @pytest.fixture(scope="module")
 def walkthrough(scene, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("walk")

@@ -1,7 +1,8 @@
 """Driven inside a Blender with a real window (tests/ui/test_ui.py):
   blender --factory-startup [--enable-event-simulate] SCENE.blend --python ui_script.py -- MODE OUT
 MODE: modal (run Estimate Sun as a click does, wait, apply, screenshot), esc
-(start it and press Esc at once) or walkthrough (the artist's steps, one
+(start it and press Esc at once), close (start it, then open the .blend
+again, closing the file under the run) or walkthrough (the artist's steps, one
 screenshot each into the folder OUT, with what the test checks beside them).
 Prints RESULT lines for the test."""
 import json
@@ -47,9 +48,40 @@ def start():
     return None
 
 
+@bpy.app.handlers.persistent
+def closed_then(*_):
+    """After the file is opened again under the run: wait for the worker,
+    then say what happened (the timer survives the load)."""
+    state["loaded"] = True
+
+
+def close_file():
+    bpy.app.handlers.load_post.append(closed_then)
+    bpy.ops.wm.open_mainfile(filepath=bpy.data.filepath)
+    bpy.app.timers.register(after_close, first_interval=0.5, persistent=True)
+    return None
+
+
+def after_close():
+    state["polls"] += 1
+    thread = background.RUN.get("thread")
+    if thread is not None and thread.is_alive() and state["polls"] < 60:
+        return 0.5
+    result("loaded", state.get("loaded", False))
+    result("worker_alive", thread is not None and thread.is_alive())
+    result("outcome", json.dumps(background.RUN["outcome"]))
+    result("notice_left", "notice" in background.RUN)
+    bpy.app.timers.register(lambda: bpy.ops.wm.quit_blender() and None, first_interval=1.0,
+                            persistent=True)
+    return None
+
+
 def poll():
     state["polls"] += 1
     track = store.load_track()
+    if mode == "close":
+        bpy.app.timers.register(close_file, first_interval=0.1, persistent=True)
+        return None
     if mode == "esc":
         if background.RUN["running"] and state["polls"] < 60:
             return 0.5
@@ -353,7 +385,7 @@ def in_camera_view(obj):
     return bool(0 <= co.x <= 1 and 0 <= co.y <= 1 and co.z > 0)
 
 
-if mode == "esc":
+if mode in ("esc", "close"):
     # A tiny clip is estimated in well under a second, before the Esc event
     # is even handled: each progress call is slowed down so that the worker
     # is still running when the cancel reaches it (as on a real clip).
