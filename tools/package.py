@@ -3,7 +3,7 @@
   python3 tools/package.py OUT_DIR MODULE.so [MODULE.so ...] [--blender CMD] [--patchelf CMD]
   (or: cmake --build build --target package_addon; a release: bash tools/release.sh)
 
-MODULE.so: _native built for CPython 3.11 and/or 3.13. Each module and exactly
+MODULE.so: _native built for CPython 3.11, 3.13 and/or 3.14. Each module and exactly
 the shared libraries it needs (found with ldd, so with the loader's own search)
 go into a `sunlapse_native` package: the modules beside `libs/`, every
 library's search path set to $ORIGIN with patchelf. Only the C runtime and
@@ -204,9 +204,11 @@ def wheel(package_dir, out_dir, version, tags):
     return path
 
 
-def _manifest_with_wheel(text, wheel_rel):
-    """The manifest with `wheels` set; top-level keys go before the first table."""
-    line = f'wheels = ["{wheel_rel}"]\n'
+def _manifest_with_wheel(text, wheel_rel, tags):
+    """The manifest with `wheels` set and a line naming the Pythons inside;
+    top-level keys go before the first table."""
+    pythons = ", ".join(f"{t[2]}.{t[3:]}" for t in tags)
+    line = f'# The wheel holds the core for CPython {pythons}.\nwheels = ["{wheel_rel}"]\n'
     m = re.search(r"^\[", text, re.M)
     return text[:m.start()] + line + "\n" + text[m.start():] if m else text + line
 
@@ -255,7 +257,7 @@ def build(modules, out_dir, blender=None, patchelf=None):
     os.makedirs(os.path.join(ext_dir, "wheels"))
     whl = wheel(native_dir, os.path.join(ext_dir, "wheels"), version, tags)
     with open(manifest_path) as fh:
-        manifest = _manifest_with_wheel(fh.read(), "./wheels/" + os.path.basename(whl))
+        manifest = _manifest_with_wheel(fh.read(), "./wheels/" + os.path.basename(whl), tags)
     with open(os.path.join(ext_dir, "blender_manifest.toml"), "w") as fh:
         fh.write(manifest)
     for path, rel in addon_files():

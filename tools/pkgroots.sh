@@ -3,7 +3,9 @@
 # the build folder (downloads cached there; the system's apt state is never
 # touched). Sourced by tools/release.sh and tools/test-packages.sh, or run:
 #   bash tools/pkgroots.sh py313      Python 3.13 headers + pybind11 (trixie)
+#   bash tools/pkgroots.sh py314      Python 3.14 headers + pybind11 (sid)
 #   bash tools/pkgroots.sh trixie     Blender 4.3 + its closure, unpacked
+#   bash tools/pkgroots.sh sid        Blender 5.x + its closure, unpacked
 #   bash tools/pkgroots.sh bookworm   a debootstrap root with only Blender 3.4
 #   bash tools/pkgroots.sh ffmpeg     a small static FFmpeg for the release module
 #   bash tools/pkgroots.sh run NAME CMD...   CMD chrooted in a root
@@ -22,10 +24,10 @@ debian_mirror() {
   echo "$uri"
 }
 
-# apt with a private state (lists, cache, an empty dpkg status) for trixie.
-_trixie_apt_dir="$ROOTS_DIR/apt-trixie"
-trixie_apt() {
-  local d="$_trixie_apt_dir"
+# apt with a private state (lists, cache, an empty dpkg status) for another
+# Debian suite (trixie, sid). Usage: suite_apt SUITE APT-ARGS...
+suite_apt() {
+  local d="$ROOTS_DIR/apt-$1"; shift
   apt-get -q -o Dir::State="$d/state" -o Dir::State::status="$d/state/status" \
     -o Dir::Cache="$d/cache" -o Dir::Etc::SourceList="$d/sources.list" \
     -o Dir::Etc::SourceParts="$d/none" -o Dir::Etc::Preferences="$d/none/prefs" \
@@ -34,29 +36,34 @@ trixie_apt() {
     -o APT::Install-Recommends=false -o Debug::NoLocking=true "$@"
 }
 
-trixie_apt_update() {
-  local d="$_trixie_apt_dir"
+suite_apt_update() {
+  local suite="$1" d="$ROOTS_DIR/apt-$1"
   mkdir -p "$d/state/lists/partial" "$d/cache/archives/partial" "$d/none"
   : >"$d/state/status"
-  echo "deb [signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] $(debian_mirror) trixie main" \
+  echo "deb [signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] $(debian_mirror) $suite main" \
     >"$d/sources.list"
-  if [ ! -f "$d/updated" ] || [ -n "$(find "$d/updated" -mtime +7)" ]; then
-    trixie_apt update >/dev/null && touch "$d/updated"
+  # sid moves daily: a day-old list may name packages the mirror has dropped.
+  local age=7; [ "$suite" = sid ] && age=0
+  if [ ! -f "$d/updated" ] || [ -n "$(find "$d/updated" -mtime +$age)" ]; then
+    suite_apt "$suite" update >/dev/null && touch "$d/updated"
   fi
 }
 
-# Python 3.13 headers and a pybind11 that knows 3.13, for the second module.
-ensure_py313() {
-  local dest="$ROOTS_DIR/py313"
+# Python headers and a pybind11 that knows them, for another module:
+# ensure_python 3.13 trixie, ensure_python 3.14 sid -> $ROOTS_DIR/py313, py314.
+ensure_python() {
+  local version="$1" suite="$2" dest="$ROOTS_DIR/py${1/./}"
   if [ -f "$dest/.done" ]; then return; fi
-  trixie_apt_update
+  suite_apt_update "$suite"
   rm -rf "$dest" && mkdir -p "$dest/debs"
-  (cd "$dest/debs" && trixie_apt download libpython3.13-dev pybind11-dev >/dev/null)
+  (cd "$dest/debs" && suite_apt "$suite" download "libpython$version-dev" pybind11-dev >/dev/null)
   for deb in "$dest"/debs/*.deb; do dpkg-deb -x "$deb" "$dest"; done
-  test -f "$dest/usr/include/python3.13/Python.h"
+  test -f "$dest/usr/include/python$version/Python.h"
   test -f "$dest/usr/include/pybind11/pybind11.h"
   touch "$dest/.done"
 }
+ensure_py313() { ensure_python 3.13 trixie; }
+ensure_py314() { ensure_python 3.14 sid; }
 
 # A small static FFmpeg (libavformat/libavcodec/libswscale) built from
 # Debian 12's own source package: only the demuxers and decoders a clip or an
@@ -96,16 +103,21 @@ ensure_ffmpeg() {
   touch "$dest/.done"
 }
 
-# Blender 4.3 (Python 3.13) with its whole closure, from trixie, unpacked.
-ensure_trixie() {
-  local dest="$ROOTS_DIR/trixie"
+# A suite's Blender with its whole closure, unpacked (its own loader runs it
+# through in_root): trixie's 4.3 (Python 3.13), sid's 5.x (Python 3.14).
+ensure_blender_root() {
+  local suite="$1" dest="$ROOTS_DIR/$1" d="$ROOTS_DIR/apt-$1"
   if [ -f "$dest/.done" ]; then return; fi
   rm -rf "$dest"
-  local d="$_trixie_apt_dir"
-  trixie_apt_update
+  suite_apt_update "$suite"
   rm -rf "$d/cache/archives"/*.deb
-  # patchelf 0.18 (trixie's) renames symbols for the release packages.
-  trixie_apt install -y --download-only blender python3-numpy patchelf >/dev/null
+  # patchelf 0.18+ (trixie's) renames symbols for the release packages.
+  # sid's Blender 5.x imports cattrs and requests in its extension manager
+  # without depending on them (without them no extension installs), and
+  # renders only with an EGL (libegl1: Mesa's, software on a machine with no
+  # GPU), which a desktop has and a bare root has not.
+  local extra=(); [ "$suite" = sid ] && extra=(python3-cattr python3-requests libegl1 libgl1)
+  suite_apt "$suite" install -y --download-only blender python3-numpy patchelf "${extra[@]}" >/dev/null
   mkdir -p "$dest"
   local n=0 deb
   for deb in "$d"/cache/archives/*.deb; do dpkg-deb -x "$deb" "$dest"; n=$((n + 1)); done
@@ -120,9 +132,11 @@ ensure_trixie() {
   ln -sf /proc/self/mounts "$dest/etc/mtab"
   mkdir -p "$dest/tmp" "$dest/proc" "$dest/dev" "$dest/work" "$dest/root"
   chmod 1777 "$dest/tmp"
-  echo "pkgroots: unpacked $n trixie packages into $dest"
+  echo "pkgroots: unpacked $n $suite packages into $dest"
   touch "$dest/.done"
 }
+ensure_trixie() { ensure_blender_root trixie; }
+ensure_sid() { ensure_blender_root sid; }
 
 # Debian 12 with Blender 3.4 and nothing of the build's (no -dev packages,
 # no OpenCV, Ceres, ERFA ...), made by debootstrap.
@@ -159,13 +173,15 @@ if [ "${BASH_SOURCE[0]}" = "$0" ]; then
   for what in "$@"; do
     case "$what" in
       py313) ensure_py313 ;;
+      py314) ensure_py314 ;;
       trixie) ensure_trixie ;;
+      sid) ensure_sid ;;
       bookworm) ensure_bookworm ;;
       ffmpeg) ensure_ffmpeg ;;
       run)  # run NAME CMD...: a command inside a root (e.g. trixie's Blender)
         shift; name="${1:?run needs a root name}"; shift
         in_root "$ROOTS_DIR/$name" "$@"; exit $? ;;
-      *) echo "pkgroots: unknown root '$what' (valid: py313, trixie, bookworm, ffmpeg)" >&2; exit 2 ;;
+      *) echo "pkgroots: unknown root '$what' (valid: py313, py314, trixie, sid, bookworm, ffmpeg, run)" >&2; exit 2 ;;
     esac
   done
 fi

@@ -1,15 +1,18 @@
 #!/usr/bin/env bash
 # Installs the release packages where the build machine's libraries are absent
 # and runs a scripted estimate with each (not part of tools/test.sh: it
-# downloads several hundred MB, cached under build/roots):
+# downloads about 1.5 GB, cached under build/roots):
 #   (a) Blender 3.4 in a debootstrap'd Debian 12 root that has Blender and
 #       nothing of the build's (no -dev packages, no OpenCV/Ceres/ERFA ...),
 #       the 3.x add-on zip installed, the estimate scripted in Python;
-#   (b) Blender 4.3 (Python 3.13) from Debian trixie, unpacked under a prefix
-#       (private apt state, dpkg-deb -x, trixie's own loader via chroot), the
+#   (b) Blender 4.3 (Python 3.13) from Debian trixie and (c) Blender 5.x
+#       (Python 3.14) from Debian sid, each unpacked under a prefix (private
+#       apt state, dpkg-deb -x, the suite's own loader via chroot), the
 #       extension installed with `-c extension install-file --enable`, then
-#       `blender -c sunlapse SCENE.blend --out ...`.
-# Both tracks must match the source tree's on the same rendered scene.
+#       `blender -c sunlapse SCENE.blend --out ... --apply-lamp --save ...`.
+# In each, the saved file is opened again (tools/check_saved_scene.py): the
+# lamp must match the track on every frame, and the AR setup (compositor
+# included) must render a frame. The tracks must match the source tree's.
 #   bash tools/test-packages.sh        (ends "test-packages: PASS" or exits 1)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -22,9 +25,10 @@ tolerance_deg="${SUNLAPSE_PACKAGE_TOLERANCE_DEG:-0.05}"
 
 "$here/tools/install.sh" >/dev/null
 bash "$here/tools/release.sh"
-echo "[test-packages] Debian 12 root with Blender 3.4 (debootstrap), trixie's Blender 4.3"
+echo "[test-packages] Debian 12 root with Blender 3.4 (debootstrap), trixie's Blender 4.3, sid's 5.x"
 ensure_bookworm
 ensure_trixie
+ensure_sid
 dist="$build_root/release/dist"
 legacy_zip=$(ls "$dist"/sunlapse-*-addon.zip)
 extension_zip=$(ls "$dist"/sunlapse-*-linux_x64.zip)
@@ -74,10 +78,12 @@ rm -f "$out"/*.sun.json
 blender -b "$scene/scene.blend" --python-exit-code 1 --python "$here/examples/run_estimate.py" \
   -- --out "$out/source.sun.json" >"$out/source.log" 2>&1 || { tail -5 "$out/source.log"; exit 1; }
 
+check_script="$here/tools/check_saved_scene.py"
+
 echo "== (a) Blender 3.4, Debian 12 root without the build's libraries: the add-on zip"
 user34="$out/user-3.4" && rm -rf "$user34" && mkdir -p "$user34"
-in_root "$ROOTS_DIR/bookworm" env HOME=/tmp BLENDER_USER_SCRIPTS="$user34/scripts" \
-  blender -b "$scene/scene.blend" --python-exit-code 1 --python-expr "
+b34() { in_root "$ROOTS_DIR/bookworm" env HOME=/tmp BLENDER_USER_SCRIPTS="$user34/scripts" blender "$@"; }
+b34 -b "$scene/scene.blend" --python-exit-code 1 --python-expr "
 import addon_utils, bpy, sys
 bpy.ops.preferences.addon_install(filepath='$legacy_zip')
 addon_utils.enable('sunlapse', default_set=True)
@@ -85,23 +91,42 @@ import sunlapse
 assert sunlapse.__file__.startswith('$user34'), sunlapse.__file__
 print('native:', sunlapse.estimate.native_loader.require().__file__)
 from sunlapse import cli
-sys.exit(cli.main(['--out', '$out/blender-3.4.sun.json']))
+sys.exit(cli.main(['--out', '$out/blender-3.4.sun.json', '--apply-lamp',
+                   '--save', '$out/blender-3.4.blend']))
 " >"$out/blender-3.4.log" 2>&1 || { tail -15 "$out/blender-3.4.log"; exit 1; }
 grep "^native:" "$out/blender-3.4.log" | sed 's/^/  /'
+b34 -b "$out/blender-3.4.blend" --python-exit-code 1 \
+  --python-expr "import addon_utils; addon_utils.enable('sunlapse')" \
+  --python "$check_script" -- "$out/blender-3.4.sun.json" "$out/ar-3.4" \
+  >"$out/blender-3.4-check.log" 2>&1 || { tail -15 "$out/blender-3.4-check.log"; exit 1; }
+grep "^check" "$out/blender-3.4-check.log" | sed 's/^/  /'
 
-echo "== (b) Blender 4.3 / Python 3.13 from trixie: the extension"
-user43="$out/user-4.3" && rm -rf "$user43" && mkdir -p "$user43"
-# (the trixie prefix has no coreutils: the environment is set out here)
-b43() { HOME=/tmp BLENDER_USER_RESOURCES="$user43" in_root "$ROOTS_DIR/trixie" /usr/bin/blender "$@"; }
-b43 -b -c extension install-file -r user_default --enable "$extension_zip" \
-  >"$out/blender-4.3-install.log" 2>&1 || { tail -15 "$out/blender-4.3-install.log"; exit 1; }
-b43 -b -c sunlapse "$scene/scene.blend" --out "$out/blender-4.3.sun.json" \
-  >"$out/blender-4.3.log" 2>&1 || { tail -15 "$out/blender-4.3.log"; exit 1; }
-b43 -b --python-expr "
+# An unpacked suite's Blender with the extension: VERSION ROOT.
+extension_run() {
+  local version="$1" root="$2" user="$out/user-$1"
+  rm -rf "$user" && mkdir -p "$user"
+  # (the unpacked prefixes have no coreutils: the environment is set out here)
+  bx() { HOME=/tmp BLENDER_USER_RESOURCES="$user" in_root "$ROOTS_DIR/$root" /usr/bin/blender "$@"; }
+  bx -b -c extension install-file -r user_default --enable "$extension_zip" \
+    >"$out/blender-$version-install.log" 2>&1 || { tail -15 "$out/blender-$version-install.log"; return 1; }
+  bx -b -c sunlapse "$scene/scene.blend" --out "$out/blender-$version.sun.json" --apply-lamp \
+    --save "$out/blender-$version.blend" >"$out/blender-$version.log" 2>&1 \
+    || { tail -15 "$out/blender-$version.log"; return 1; }
+  bx -b --python-expr "
 import sys, addon_utils
 print('python', sys.version.split()[0])
 import sunlapse_native._native as n; print('native:', n.__file__)
 " 2>&1 | grep -E "^(python|native:)" | sed 's/^/  /' || true
+  bx -b "$out/blender-$version.blend" --python-exit-code 1 --python "$check_script" -- \
+    "$out/blender-$version.sun.json" "$out/ar-$version" >"$out/blender-$version-check.log" 2>&1 \
+    || { tail -15 "$out/blender-$version-check.log"; return 1; }
+  grep "^check" "$out/blender-$version-check.log" | sed 's/^/  /'
+}
+
+echo "== (b) Blender 4.3 / Python 3.13 from trixie: the extension"
+extension_run 4.3 trixie
+echo "== (c) Blender 5.x / Python 3.14 from sid: the extension"
+extension_run 5 sid
 
 echo "== accuracy against the truth, and each package against the source tree"
 /usr/bin/python3 - "$here" "$scene/truth.sun.json" "$out" "$tolerance_deg" <<'PY'
@@ -111,12 +136,12 @@ sys.path.insert(0, os.path.join(here, "addon"))
 from core import evaluation, trackfile
 truth = trackfile.read_track(truth_path)
 tracks = {n: trackfile.read_track(os.path.join(out, n + ".sun.json"))
-          for n in ("source", "blender-3.4", "blender-4.3")}
+          for n in ("source", "blender-3.4", "blender-4.3", "blender-5")}
 reports = [evaluation.evaluate(n, t, truth) for n, t in tracks.items()]
 print(evaluation.format_table(reports))
 src = {f.frame: f for f in tracks["source"].frames}
 ok = True
-for name in ("blender-3.4", "blender-4.3"):
+for name in ("blender-3.4", "blender-4.3", "blender-5"):
     worst, compared = 0.0, 0
     for f in tracks[name].frames:
         s = src.get(f.frame)

@@ -29,8 +29,11 @@ def test_extension_manifest_has_the_required_fields(packages):
     legacy, extension = packages
     with zipfile.ZipFile(extension) as z:
         names = z.namelist()
-        manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+        manifest_text = z.read("blender_manifest.toml").decode()
+        manifest = tomllib.loads(manifest_text)
     assert all(k in manifest for k in REQUIRED)
+    # It names exactly the Pythons the wheel holds.
+    assert "# The wheel holds the core for CPython 3.11.\n" in manifest_text
     assert manifest["schema_version"] == "1.0.0" and manifest["type"] == "add-on"
     assert manifest["platforms"] == ["linux-x64"]
     assert "__init__.py" in names and "core/trackfile.py" in names
