@@ -248,6 +248,26 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         self._end(context)
 
 
+class CLIP_OT_sunlapse_show_text(bpy.types.Operator):
+    """Read the whole message"""
+    bl_idname = "clip.sunlapse_show_text"
+    bl_label = "sunlapse Message"
+    bl_options = {"INTERNAL"}
+
+    text: bpy.props.StringProperty()
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_popup(self, width=520)
+
+    def draw(self, context):
+        from . import panels
+        panels.wrapped(self.layout, context, self.text, max_lines=60, width_px=500)
+
+    def execute(self, context):
+        print(f"sunlapse: {self.text}")  # from a script: to the console
+        return {"FINISHED"}
+
+
 class CLIP_OT_sunlapse_notice(bpy.types.Operator):
     """Shows a message in the status bar (what happened to a run whose file
     was closed; only operators can report)"""
@@ -363,14 +383,35 @@ class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
                     "that they come out as dark as the footage's (a few seconds)")
 
     def execute(self, context):
+        wm = context.window_manager
+        workspace = context.workspace
+
+        def progress(fraction, text):
+            # It blocks for seconds (the check render): the cursor's counter
+            # and the status bar say what it does.
+            wm.progress_update(int(100 * fraction))
+            if workspace is not None and not bpy.app.background:
+                workspace.status_text_set(text)
+                try:
+                    bpy.ops.wm.redraw_timer(type="DRAW_WIN_SWAP", iterations=1)
+                except RuntimeError:
+                    pass
+        warnings, details = [], []
+        wm.progress_begin(0, 100)
         try:
-            warnings = []
             note = ar.setup(context, add_sample_object=self.add_sample_object, warnings=warnings,
-                            match_shadows=self.match_shadows)
+                            match_shadows=self.match_shadows, details=details,
+                            progress=progress)
         except (gather.SceneError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
+        finally:
+            wm.progress_end()
+            if workspace is not None:
+                workspace.status_text_set(None)
         self.report({"INFO"}, note)
+        for line in details:  # the figures, in the Info log
+            self.report({"INFO"}, line)
         for w in warnings:
             self.report({"WARNING"}, w)
         return {"FINISHED"}
@@ -504,7 +545,8 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
 classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene,
            CLIP_OT_sunlapse_initial_sun, CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_cancel,
            CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export, CLIP_OT_sunlapse_setup_ar,
-           CLIP_OT_sunlapse_to_sun_position, CLIP_OT_sunlapse_notice)
+           CLIP_OT_sunlapse_to_sun_position, CLIP_OT_sunlapse_notice,
+           CLIP_OT_sunlapse_show_text)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 

@@ -4,7 +4,8 @@ On the current frame: the tracked shadow (caster foot to shadow tip), its
 ends, and its labelled confidence; at the bottom, on a dark box, a plot over
 the clip: elevation and azimuth (each on its own axis, in degrees, titled
 with what the azimuth is measured from) and the confidence, with the current
-frame marked and its values written under it (Plot over Clip turns it off).
+frame marked and its values written on a line of their own above it. Both
+are turned on and off in the editor's Overlays popover (Display in 3.x).
 """
 
 import bpy
@@ -44,11 +45,21 @@ def nice_range(lo, hi, min_span=2.0):
     return math.floor((mid - span / 2) / step) * step, math.ceil((mid + span / 2) / step) * step
 
 
-def plot_layout(track, frame, x0, y0, w, h):
+def _text_width(text, size):
+    """A text's width without the font (tests): the UI font's digits and
+    letters average about 0.6 of its size."""
+    return 0.6 * size * len(text)
+
+
+def plot_layout(track, frame, x0, y0, w, h, size=11.0, text_width=_text_width):
     """What the plot draws, in region pixels, as plain data (tested without
     a GPU): strips of (title, colour, (lo, hi), points), the frame marker x,
-    and the current frame's values. Elevation and azimuth (as the panel
-    shows them) each get a strip with its own degree axis; confidence 0..1."""
+    the current frame's values, and the text labels below and above the
+    strips as (text, x, y) with `size`-pixel text measured by `text_width`.
+    Elevation and azimuth (as the panel shows them) each get a strip with
+    its own degree axis; confidence 0..1. The frame range sits under the
+    plot, the current frame's readout on its own line over it, so that
+    neither covers the other at any frame."""
     est = [f for f in track.frames if f.has_estimate]
     if len(est) < 2:
         return None
@@ -79,8 +90,16 @@ def plot_layout(track, frame, x0, y0, w, h):
     values = None
     if cur is not None and cur.has_estimate:
         values = (90.0 - cur.zenith_deg, az(cur), cur.confidence)
+    below = y0 - 1.45 * size
+    labels = [(f"frame {f0}", x0, below)]
+    last = f"frame {f1}"
+    labels.append((last, x0 + w - text_width(last, size), below))
+    if values is not None:
+        el, azimuth, conf = values
+        text = f"frame {frame}: elevation {el:.1f}°  azimuth {azimuth:.1f}°  confidence {conf:.2f}"
+        labels.append((text, x0, y0 + h + 0.6 * size))
     return {"strips": strips, "marker_x": x0 + w * (min(max(frame, f0), f1) - f0) / span,
-            "frames": (f0, f1), "values": values, "box": (x0, y0, w, h)}
+            "frames": (f0, f1), "values": values, "labels": labels, "box": (x0, y0, w, h)}
 
 
 def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
@@ -88,18 +107,21 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
     left = 46 * scale                       # room for the degree labels
     w = min(520 * scale, region.width - left - 30 * scale)
     h = 190 * scale
+    size = int(11 * scale)
     x0, y0 = left + 10 * scale, 30 * scale
-    plot = plot_layout(track, frame, x0, y0, w, h)
+    blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
+    plot = plot_layout(track, frame, x0, y0, w, h, size,
+                       lambda text, _: blf.dimensions(0, text)[0])
     if plot is None or w < 80:
         return
-    # A dark box behind the plot keeps it readable over any footage.
-    bx0, by0, bx1, by1 = x0 - left, y0 - 22 * scale, x0 + w + 12 * scale, y0 + h + 8 * scale
+    # A dark box behind the plot keeps it readable over any footage; its top
+    # line holds the current frame's readout.
+    bx0, by0 = x0 - left, y0 - 22 * scale
+    bx1, by1 = x0 + w + 12 * scale, y0 + h + 2.2 * size
     shader.bind()
     shader.uniform_float("color", PLOT_BACK)
     batch_for_shader(shader, "TRIS", {"pos": [(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by0),
                                               (bx1, by1), (bx0, by1)]}).draw(shader)
-    size = int(11 * scale)
-    blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
     for title, color, (lo, hi), pts, sy, sh in plot["strips"]:
         shader.uniform_float("color", (1, 1, 1, 0.25))
         batch_for_shader(shader, "LINES", {"pos": [(x0, sy), (x0 + w, sy), (x0, sy + sh),
@@ -118,19 +140,9 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
     xm = plot["marker_x"]
     shader.uniform_float("color", (1, 1, 1, 0.9))
     batch_for_shader(shader, "LINES", {"pos": [(xm, y0), (xm, y0 + h)]}).draw(shader)
-    f0, f1 = plot["frames"]
-    blf.color(0, 0.85, 0.85, 0.85, 1.0)
-    blf.position(0, x0, y0 - 16 * scale, 0)
-    blf.draw(0, f"frame {f0}")
-    text = f"frame {f1}"
-    blf.position(0, x0 + w - blf.dimensions(0, text)[0], y0 - 16 * scale, 0)
-    blf.draw(0, text)
-    if plot["values"] is not None:
-        el, az, conf = plot["values"]
-        text = f"{frame}: el {el:.1f}°  az {az:.1f}°  conf {conf:.2f}"
-        tw = blf.dimensions(0, text)[0]
-        blf.color(0, 1, 1, 1, 1)
-        blf.position(0, min(max(x0, xm - tw / 2), x0 + w - tw), y0 - 16 * scale, 0)
+    for k, (text, x, y) in enumerate(plot["labels"]):
+        blf.color(0, *((1, 1, 1, 1) if k == 2 else (0.85, 0.85, 0.85, 1.0)))
+        blf.position(0, x, y, 0)
         blf.draw(0, text)
 
 
@@ -155,7 +167,9 @@ def _draw():
     shader = gpu.shader.from_builtin("2D_UNIFORM_COLOR")
     gpu.state.blend_set("ALPHA")
     gpu.state.line_width_set(2.0)
-    if est is not None and est.shadow_start_px and est.shadow_end_px:
+    settings = getattr(context.scene, "sunlapse", None)
+    if est is not None and est.shadow_start_px and est.shadow_end_px and \
+            (settings is None or settings.show_shadow):
         a = clip_to_region(region, width, height, *est.shadow_start_px)
         b = clip_to_region(region, width, height, *est.shadow_end_px)
         good = est.confidence >= 0.5 and est.raw_zenith_deg is not None
@@ -169,7 +183,6 @@ def _draw():
         blf.color(0, 1, 1, 1, 1)
         blf.draw(0, f"shadow tracked, confidence {est.confidence:.2f}" if est.reason is None
                  else est.reason[:60])
-    settings = getattr(context.scene, "sunlapse", None)
     if settings is None or settings.show_plot:
         gpu.state.line_width_set(1.5)
         _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu)

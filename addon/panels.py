@@ -9,7 +9,7 @@ sidebar width.
 
 import bpy
 
-from .blender import background, gather, store
+from .blender import background, compat, gather, store
 from .core import angles, trackfile
 from .estimate import native_loader
 
@@ -29,13 +29,15 @@ def _wrap(text, width_px, measure):
     return lines
 
 
-def wrapped(layout, context, text, icon="NONE", max_lines=6):
+def wrapped(layout, context, text, icon="NONE", max_lines=6, width_px=None):
     """A long message as several labels, broken at the panel's width (a
-    single label would be cut after a few words)."""
+    single label would be cut after a few words); past max_lines, a button
+    opens the whole of it."""
     import blf
     region = getattr(context, "region", None)
-    scale = context.preferences.system.ui_scale
-    width = (region.width if region is not None else 300) - 72 * scale \
+    scale = context.preferences.system.ui_scale or 1.0  # 0 with no window (blender -b)
+    width = width_px if width_px is not None else \
+        (region.width if region is not None else 300) - 72 * scale \
         - (20 * scale if icon != "NONE" else 0)
     size = context.preferences.ui_styles[0].widget_label.points * scale
     if bpy.app.version >= (4, 0, 0):
@@ -45,9 +47,12 @@ def wrapped(layout, context, text, icon="NONE", max_lines=6):
     lines = _wrap(text, width, lambda t: blf.dimensions(0, t)[0])
     col = layout.column(align=True)
     for k, line in enumerate(lines[:max_lines]):
-        if k == max_lines - 1 and len(lines) > max_lines:
-            line = line[:-3] + "..."
         col.label(text=line, icon=icon if k == 0 else "BLANK1" if icon != "NONE" else "NONE")
+    if len(lines) > max_lines:
+        # The rest is a click away, not cut off.
+        op = col.operator("clip.sunlapse_show_text", text=f"Read All ({len(lines)} lines)",
+                          icon="TEXT")
+        op.text = text
     return col
 
 
@@ -247,7 +252,6 @@ def draw_lamp(self, context):
     if s.last_apply:
         wrapped(col, context, s.last_apply, icon="CHECKMARK", max_lines=3)
     layout.operator("clip.sunlapse_setup_ar", icon="RENDER_ANIMATION")
-    layout.prop(s, "show_plot")
 
 
 def draw_export(self, context):
@@ -301,6 +305,19 @@ def draw_track_menu(self, context):
     self.layout.menu(CLIP_MT_sunlapse.bl_idname, icon="LIGHT_SUN")
 
 
+def draw_overlay_options(self, context):
+    """The overlay's toggles where the editor's own are: its Overlays
+    popover (Blender 4.2+), or the Display popover before."""
+    s = getattr(context.scene, "sunlapse", None)
+    if s is None:
+        return
+    layout = self.layout
+    layout.separator()
+    col = layout.column(heading="Sun", align=True)
+    col.prop(s, "show_plot")
+    col.prop(s, "show_shadow")
+
+
 classes = _make_classes() + (CLIP_MT_sunlapse,)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
@@ -308,8 +325,10 @@ _register, _unregister = bpy.utils.register_classes_factory(classes)
 def register():
     _register()
     bpy.types.CLIP_MT_track.append(draw_track_menu)
+    compat.clip_overlay_panel().append(draw_overlay_options)
 
 
 def unregister():
+    compat.clip_overlay_panel().remove(draw_overlay_options)
     bpy.types.CLIP_MT_track.remove(draw_track_menu)
     _unregister()

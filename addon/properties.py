@@ -109,9 +109,12 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         description="Also keyframe the world's Nishita Sky Texture from the track")
     last_report: StringProperty(name="Last check", default="")
     last_apply: StringProperty(name="Last apply", default="")
-    show_plot: BoolProperty(name="Plot over Clip", default=True,
+    show_plot: BoolProperty(name="Sun Plot", default=True,
                             description="Draw the elevation/azimuth/confidence plot over "
                                         "the clip in the Movie Clip Editor")
+    show_shadow: BoolProperty(name="Tracked Shadow", default=True,
+                              description="Draw the current frame's tracked shadow and its "
+                                          "confidence over the clip")
 
 
 classes = (SunlapseSettings,)

@@ -29,6 +29,8 @@ AR_KEYS_PROP = "sunlapse_ar_frames"
 # Real shadows that see less of the sky than this are indoors or walled in:
 # their light is bounced, which the open-sky balance does not model.
 ENCLOSED_SKY_SEEN = 0.5
+# Viewport samples for the AR preview: enough to judge the inserts' light.
+PREVIEW_SAMPLES = 32
 
 
 def _model_objects(context):
@@ -43,33 +45,30 @@ def _model_objects(context):
 def _compositor(scene, clip):
     """clip x Shadow Catcher pass, inserts alpha-over it, to the Composite
     and a Viewer (the backdrop shows the composite)."""
-    scene.use_nodes = True
-    nt = scene.node_tree
+    nt = compat.compositor_tree(scene)
     for n in list(nt.nodes):
         if n.name.startswith("sunlapse"):
             nt.nodes.remove(n)
     rl = next((n for n in nt.nodes if n.bl_idname == "CompositorNodeRLayers"), None) \
         or nt.nodes.new("CompositorNodeRLayers")
-    comp = next((n for n in nt.nodes if n.bl_idname == "CompositorNodeComposite"), None) \
-        or nt.nodes.new("CompositorNodeComposite")
+    comp, comp_in = compat.composite_input(nt)
     mc = nt.nodes.new("CompositorNodeMovieClip")
     mc.name = "sunlapse clip"
     mc.clip = clip
-    mul = nt.nodes.new("CompositorNodeMixRGB")
+    mul, mul_clip, mul_catcher, mul_out = compat.multiply_node(nt)
     mul.name = "sunlapse shadows"
-    mul.blend_type = "MULTIPLY"
-    mul.inputs[0].default_value = 1.0
     over = nt.nodes.new("CompositorNodeAlphaOver")
     over.name = "sunlapse over clip"
+    over_back, over_front = compat.alpha_over_inputs(over)
     viewer = nt.nodes.new("CompositorNodeViewer")
     viewer.name = "sunlapse viewer"
-    nt.links.new(mc.outputs["Image"], mul.inputs[1])
+    nt.links.new(mc.outputs["Image"], mul_clip)
     catcher = rl.outputs.get("Shadow Catcher")
     if catcher is not None:
-        nt.links.new(catcher, mul.inputs[2])
-    nt.links.new(mul.outputs["Image"], over.inputs[1])
-    nt.links.new(rl.outputs["Image"], over.inputs[2])
-    nt.links.new(over.outputs["Image"], comp.inputs["Image"])
+        nt.links.new(catcher, mul_catcher)
+    nt.links.new(mul_out, over_back)
+    nt.links.new(rl.outputs["Image"], over_front)
+    nt.links.new(over.outputs["Image"], comp_in)
     nt.links.new(over.outputs["Image"], viewer.inputs["Image"])
     for node, xy in ((rl, (0, 300)), (mc, (0, -100)), (mul, (300, 0)), (over, (500, 150)),
                      (comp, (750, 250)), (viewer, (750, 50))):
@@ -226,7 +225,9 @@ def render_model_shadows(context, frame, mask, casters, inserts):
     readable in background mode)."""
     import tempfile
     scene = context.scene
-    nt = scene.node_tree
+    nt = compat.compositor_tree(scene, create=False)
+    if nt is None:
+        return None
     rl = next((n for n in nt.nodes if n.bl_idname == "CompositorNodeRLayers"), None)
     catcher = rl.outputs.get("Shadow Catcher") if rl is not None else None
     if catcher is None:
@@ -248,16 +249,11 @@ def render_model_shadows(context, frame, mask, casters, inserts):
                 o.is_shadow_catcher = False
             for o in inserts:
                 o.hide_render = True
-            out = nt.nodes.new("CompositorNodeOutputFile")
+            out, out_in, written = compat.file_output(nt, folder, "catcher")
             out.name = "sunlapse check"
-            out.base_path = folder
-            out.format.file_format = "OPEN_EXR"
-            out.format.color_depth = "32"
-            out.file_slots.clear()
-            out.file_slots.new("catcher")
-            nt.links.new(catcher, out.inputs["catcher"])
+            nt.links.new(catcher, out_in)
             bpy.ops.render.render()
-            path = os.path.join(folder, f"catcher{frame:04d}.exr")
+            path = written(frame)
             if not os.path.exists(path):
                 return None
             img = bpy.data.images.load(path)
@@ -310,27 +306,36 @@ def match_render(context, sun_obj, balances, model_objects, ground_names):
 def preview_in_viewports(context, camera_obj):
     """Every 3D View of the window looks through the camera, rendered: the
     footage behind (camera background, transparent film), the model as
-    shadow catcher, the inserts lit by the keyed Sun."""
+    shadow catcher, the inserts lit by the keyed Sun. The 3D Views an area
+    keeps while it shows another editor (the Movie Clip Editor the setup
+    ran from) are set too: switching the area back shows the preview.
+    Returns how many were set."""
     screen = getattr(context, "screen", None) or getattr(context.window, "screen", None)
     if screen is None:
         return 0
     n = 0
     for area in screen.areas:
-        if area.type != "VIEW_3D":
-            continue
-        space = area.spaces.active
-        space.shading.type = "RENDERED"
-        space.region_3d.view_perspective = "CAMERA"
-        space.camera = camera_obj if space.use_local_camera else space.camera
+        for space in area.spaces:
+            if space.type != "VIEW_3D" or space.region_3d is None:
+                continue
+            space.shading.type = "RENDERED"
+            space.region_3d.view_perspective = "CAMERA"
+            if space.use_local_camera:
+                space.camera = camera_obj
+            n += 1
         area.tag_redraw()
-        n += 1
     return n
 
 
 def setup(context, add_sample_object=True, balance=True, preview=True, warnings=None,
-          match_shadows=True):
+          match_shadows=True, details=None, progress=None):
     """Configures the scene for AR renders; returns a one-line summary.
-    Warnings go to `warnings` (a list) when given, else into the summary."""
+    Warnings go to `warnings` (a list) when given, else into the summary;
+    likewise the light's measured figures to `details`. `progress(fraction,
+    text)` is told each step (the check render takes seconds)."""
+    def step(fraction, text):
+        if progress is not None:
+            progress(fraction, text)
     scene = context.scene
     settings = scene.sunlapse
     sun = settings.sun_lamp
@@ -351,6 +356,11 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
     scene.view_settings.gamma = 1.0
+    # Cycles' default viewport samples (1024, or 0: unlimited) keep a CPU
+    # busy for minutes on a preview that needs a few dozen.
+    if scene.cycles.preview_samples == 0 or scene.cycles.preview_samples > PREVIEW_SAMPLES:
+        scene.cycles.preview_samples = PREVIEW_SAMPLES
+    step(0.05, "AR setup: the scene and the compositor")
     model = _model_objects(context)
     for obj in model:
         obj.is_shadow_catcher = True
@@ -390,14 +400,16 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     if balance and track is not None:
         frames = [f.frame for f in track.estimated()]
         picks = notes.spread(frames, BALANCE_FRAMES)
+        step(0.2, f"AR setup: measuring the footage's shadows on {len(picks)} frames")
         balances, ground_names = measure_balance(context, track, picks)
     checked = None
     if balances:
         key_light(context, sun, balances)
         if match_shadows and not comp_note:  # the check render reads a compositor output
+            step(0.5, "AR setup: rendering the model's shadows once to match the footage's")
             try:
                 checked = match_render(context, sun, balances, model, ground_names)
-            except (AttributeError, KeyError, RuntimeError) as e:
+            except (AttributeError, KeyError, RuntimeError, TypeError) as e:
                 if warnings is not None:
                     warnings.append(f"the check render of the model's shadows failed ({e}): "
                                     f"the light is set from the formula alone")
@@ -405,13 +417,20 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
             keys.apply_track(context, track, sun, sync_sky=False)
         ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
         seen = np.mean([b[3] for b in balances])
-        light = (f"; light from the footage's shadows on {len(balances)} frame(s): shadow/lit "
-                 f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear; their casters "
-                 f"hide {100 * (1 - seen):.0f}% of the sky)")
+        figures = [f"light measured on {len(balances)} frame(s) of the footage: shadow/lit "
+                   f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear); their "
+                   f"casters hide {100 * (1 - seen):.0f}% of the sky"]
         if checked is not None:
             got, want = checked
-            light += (f"; the model's shadows rendered at R {got[0]:.2f} G {got[1]:.2f} B "
-                      f"{got[2]:.2f} for {want[0]:.2f}/{want[1]:.2f}/{want[2]:.2f}: corrected")
+            figures.append(f"the model's shadows rendered at R {got[0]:.2f} G {got[1]:.2f} "
+                           f"B {got[2]:.2f} for {want[0]:.2f}/{want[1]:.2f}/{want[2]:.2f}: "
+                           f"corrected")
+        if details is None:
+            light = "; " + "; ".join(figures)
+        else:
+            details.extend(figures)
+            light = (f", lamp and sky lit as the footage's shadows show "
+                     f"({len(balances)} frames{', checked by a render' if checked else ''})")
         if seen < ENCLOSED_SKY_SEEN:
             note = ("the footage's shadows are enclosed (a room?): the light of an open sky is "
                     "assumed and the inserts' shadows will come out too dark")
@@ -425,11 +444,16 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
             world, bgn = _sky_world(scene)
             bgn.inputs["Color"].default_value = (0.55, 0.7, 1.0, 1.0)
             bgn.inputs["Strength"].default_value = 0.3
+    step(0.95, "AR setup: the preview")
     scene.frame_set(scene.frame_current)
+    shown = ""
     if preview and not bpy.app.background:
-        preview_in_viewports(context, camera_obj)
+        shown = ("; previewed in the 3D View through the camera"
+                 if preview_in_viewports(context, camera_obj) else
+                 "; open a 3D View (it looks through the camera, rendered) or render (F12) "
+                 "to see it")
     return (f"AR render set up: {len(model)} model objects catch shadows{inserted}{light}"
-            f"{comp_note}")
+            f"{comp_note}{shown}")
 
 
 def render_frames(context, folder, frames):

@@ -160,6 +160,8 @@ def test_walkthrough_plot_and_apply_result_are_drawn(walkthrough):
 def test_walkthrough_ar_preview_shows_the_footage_through_the_camera(walkthrough, scene):
     r, steps = walkthrough
     assert r["setup_ar"] == "{'FINISHED'}"
+    # Cycles' 1024 viewport samples were left in place.
+    assert 0 < int(r["preview_samples"]) <= 64
     s = steps["ar_preview"]
     assert s["shading"] == "RENDERED" and s["perspective"] == "CAMERA"
     assert not s["sun_in_camera_frame"]     # the lamp is kept out of shot

@@ -334,16 +334,16 @@ def step_lamp_panel():
     snap("lamp_and_render", sidebar=region_rect(area, "UI"))
     with bpy.context.temp_override(window=win, area=area, region=region):
         result("setup_ar", bpy.ops.clip.sunlapse_setup_ar())
-    # The AR preview: the same area as a 3D View through the camera.
+    scene = bpy.context.scene
+    result("preview_samples", scene.cycles.preview_samples)
+    # The AR preview as a user finds it: the same area switched back to the
+    # 3D View it was, nothing else done (the view centred for the shot).
     area.type = "VIEW_3D"
     space = area.spaces.active
     space.show_region_ui = False
-    scene = bpy.context.scene
     scene.cycles.preview_samples = 4  # a 2-core test machine
     with bpy.context.temp_override(window=win, area=area,
                                    region=next(r for r in area.regions if r.type == "WINDOW")):
-        from sunlapse.blender import ar
-        ar.preview_in_viewports(bpy.context, scene.camera)
         bpy.ops.view3d.view_center_camera()
     bpy.app.timers.register(step_ar, first_interval=6.0)
     return None
