@@ -388,14 +388,10 @@ class CLIP_OT_sunlapse_setup_ar(bpy.types.Operator):
 
         def progress(fraction, text):
             # It blocks for seconds (the check render): the cursor's counter
-            # and the status bar say what it does.
+            # moves at once; the status bar says the step at its next redraw.
             wm.progress_update(int(100 * fraction))
             if workspace is not None and not bpy.app.background:
                 workspace.status_text_set(text)
-                try:
-                    bpy.ops.wm.redraw_timer(type="DRAW_WIN_SWAP", iterations=1)
-                except RuntimeError:
-                    pass
         warnings, details = [], []
         wm.progress_begin(0, 100)
         try:

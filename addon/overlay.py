@@ -10,7 +10,7 @@ are turned on and off in the editor's Overlays popover (Display in 3.x).
 
 import bpy
 
-from .blender import store
+from .blender import compat, store
 from .core import angles
 
 _handle = None
@@ -146,7 +146,23 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
         blf.draw(0, text)
 
 
+_draw_failed = []
+
+
 def _draw():
+    """Draw handler: a failure is said once, never a traceback per redraw."""
+    try:
+        _draw_overlay()
+    except Exception as e:  # noqa: BLE001 -- an overlay must never break the editor
+        if not _draw_failed:
+            _draw_failed.append(e)
+            print(f"sunlapse: the overlay over the clip could not be drawn "
+                  f"({type(e).__name__}: {e}); it stays off until Blender restarts")
+
+
+def _draw_overlay():
+    if _draw_failed:
+        return
     import blf
     import gpu
     from gpu_extras.batch import batch_for_shader
@@ -164,7 +180,7 @@ def _draw():
         return
     frame = context.scene.frame_current
     est = track.frame(frame)
-    shader = gpu.shader.from_builtin("2D_UNIFORM_COLOR")
+    shader = compat.uniform_color_shader()
     gpu.state.blend_set("ALPHA")
     gpu.state.line_width_set(2.0)
     settings = getattr(context.scene, "sunlapse", None)

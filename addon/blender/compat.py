@@ -29,6 +29,23 @@ def clip_overlay_panel():
     return getattr(bpy.types, "CLIP_PT_overlay", None) or bpy.types.CLIP_PT_display
 
 
+def uniform_color_shader():
+    """The built-in flat-colour shader: 'UNIFORM_COLOR' where it exists
+    (4.0 removed the '2D_' name), '2D_UNIFORM_COLOR' before."""
+    import gpu
+    try:
+        return gpu.shader.from_builtin("UNIFORM_COLOR")
+    except ValueError:
+        return gpu.shader.from_builtin("2D_UNIFORM_COLOR")
+
+
+def label_points(context):
+    """The UI font's size for labels, in points: the style's widget_label
+    before 5.0, widget from 5.0 (which merged the two)."""
+    style = context.preferences.ui_styles[0]
+    return (getattr(style, "widget_label", None) or style.widget).points
+
+
 def compositor_tree(scene, create=True):
     """The scene's compositor node tree, made when `create` and missing.
     Before 5.0 it is scene.node_tree (with use_nodes on); 5.0 made it a node

@@ -7,14 +7,21 @@ screenshot each into the folder OUT, with what the test checks beside them).
 Prints RESULT lines for the test."""
 import json
 import os
+import shutil
+import subprocess
 import sys
 
 import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "examples"))
+# In another Blender, the packaged core where its extension put it.
+if os.environ.get("SUNLAPSE_UI_SYS_PATH"):
+    sys.path.insert(0, os.environ["SUNLAPSE_UI_SYS_PATH"])
 import run_estimate  # noqa: E402
 
+# The splash (5.x's first-start Quick Setup too) would cover the editors.
+bpy.context.preferences.view.show_splash = False
 sunlapse = run_estimate.load_sunlapse()
 sunlapse.register()
 from sunlapse import operators, panels  # noqa: E402
@@ -22,6 +29,44 @@ from sunlapse.blender import background, store  # noqa: E402
 
 mode, out = sys.argv[sys.argv.index("--") + 1:][:2]
 state = {"polls": 0}
+
+
+def screenshot(path):
+    """Blender's own screenshot; where its read-back of the window comes out
+    black (Blender 5.x on Mesa's llvmpipe under Xvfb) the X server's image of
+    the screen instead (xwd), which is what a user sees."""
+    bpy.ops.screen.screenshot(filepath=path)
+    import numpy as np
+    img = bpy.data.images.load(path)
+    try:
+        rgba = np.array(img.pixels[:], dtype=np.float32).reshape(-1, 4)
+        blank = rgba.size == 0 or rgba[:, :3].max() == 0.0
+    finally:
+        bpy.data.images.remove(img)
+    if blank and shutil.which("xwd"):
+        xwd_to_png(subprocess.run(["xwd", "-root", "-silent"], capture_output=True,
+                                  check=True).stdout, path)
+        result("screenshot_from", "xwd")
+
+
+def xwd_to_png(data, path):
+    """A 24/32-bit TrueColor X window dump saved as PNG through Blender."""
+    import struct
+    import numpy as np
+    header = struct.unpack(">25I", data[:100])
+    size, width, height, bytes_per_line, ncolors = (header[0], header[4], header[5],
+                                                    header[12], header[19])
+    start = size + 12 * ncolors
+    rows = np.frombuffer(data[start:start + bytes_per_line * height], dtype=np.uint8)
+    bgrx = rows.reshape(height, bytes_per_line)[:, :4 * width].reshape(height, width, 4)
+    rgba = np.ones((height, width, 4), dtype=np.float32)
+    rgba[..., :3] = bgrx[..., [2, 1, 0]] / 255.0
+    img = bpy.data.images.new("sunlapse screenshot", width, height)
+    img.pixels.foreach_set(rgba[::-1].ravel())  # Blender's rows go bottom-up
+    img.filepath_raw = path
+    img.file_format = "PNG"
+    img.save()
+    bpy.data.images.remove(img)
 
 
 def result(key, value):
@@ -101,7 +146,7 @@ def poll():
 
 
 def shot():
-    bpy.ops.screen.screenshot(filepath=out)  # the overlay draws in this redraw
+    screenshot(out)  # the overlay draws in this redraw
     result("screenshot", os.path.exists(out))
     bpy.ops.wm.quit_blender()
 
@@ -127,7 +172,7 @@ def statusbar_rect(win):
 
 def snap(name, **facts):
     path = os.path.join(out, f"{len(steps) + 1:02d}_{name}.png")
-    bpy.ops.screen.screenshot(filepath=path)
+    screenshot(path)
     steps.append(dict(name=name, path=path, **facts))
     result("step", name)
 
@@ -140,8 +185,8 @@ def label_fits():
     win, area, _ = clip_area()
     region = next(r for r in area.regions if r.type == "UI")
     scale = bpy.context.preferences.system.ui_scale
-    style = bpy.context.preferences.ui_styles[0].widget_label
-    size = style.points * scale
+    from sunlapse.blender import compat
+    size = compat.label_points(bpy.context) * scale
     blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
     unit = 20 * scale
     # The sidebar keeps a tab column and panel margins; sub-panels indent.
@@ -236,12 +281,15 @@ def sun_tab(then, tries=[0]):
             bpy.app.timers.register(then, first_interval=0.3)
             return None
         tries[0] += 1
-        if tries[0] > 8:
+        if tries[0] > 24:
+            screenshot(os.path.join(out, "sun_tab_not_found.png"))  # for the failure
             result("sun_tab", "not found")
             bpy.ops.wm.quit_blender()
             return None
-        win.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=ui.x + ui.width // 2,
-                           y=ui.y + ui.height // 2, ctrl=True)
+        # Over the region's empty foot: over a field, Ctrl+Wheel edits it.
+        x, y = ui.x + ui.width // 2, ui.y + 30
+        win.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x, y=y)  # 5.x: hover first
+        win.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=x, y=y, ctrl=True)
         nonlocal_before[0] = panels.DRAWN.get("CLIP_EDITOR", 0)
         return 0.4
     nonlocal_before = [before]
@@ -373,6 +421,7 @@ def step_ar():
          sun_in_camera_frame=in_camera_view(sun))
     with open(os.path.join(out, "steps.json"), "w") as fh:
         json.dump(steps, fh, indent=1)
+    result("blender", bpy.app.version[0])
     result("steps", len(steps))
     bpy.ops.wm.quit_blender()
     return None
