@@ -115,8 +115,10 @@ ensure_blender_root() {
   # sid's Blender 5.x imports cattrs and requests in its extension manager
   # without depending on them (without them no extension installs), and
   # renders only with an EGL (libegl1: Mesa's, software on a machine with no
-  # GPU), which a desktop has and a bare root has not.
-  local extra=(); [ "$suite" = sid ] && extra=(python3-cattr python3-requests libegl1 libgl1)
+  # GPU), which a desktop has and a bare root has not. xwd: the window tests'
+  # screenshots (Blender's own read-back is black on llvmpipe under Xvfb).
+  local extra=()
+  [ "$suite" = sid ] && extra=(python3-cattr python3-requests libegl1 libgl1 x11-apps)
   suite_apt "$suite" install -y --download-only blender python3-numpy patchelf "${extra[@]}" >/dev/null
   mkdir -p "$dest"
   local n=0 deb
@@ -158,15 +160,18 @@ ensure_bookworm() {
 
 # Runs a command chrooted in ROOT with /proc, /dev and the source tree (at
 # its own path), in a private mount namespace (the mounts vanish with the
-# command). Usage: in_root ROOT CMD...
+# command). /tmp is its own, unless SUNLAPSE_ROOT_SHARE_TMP=1 shares the
+# machine's (an X server's socket and cookie, pytest's folders: the window
+# tests). Usage: in_root ROOT CMD...
 in_root() {
   local root="$1"; shift
   mkdir -p "$root$_here" "$root/proc" "$root/dev" "$root/tmp"
   unshare --mount --propagation private -- sh -c '
-    root="$1"; here="$2"; shift 2
+    root="$1"; here="$2"; share="$3"; shift 3
+    if [ "$share" = 1 ]; then tmp="mount --rbind /tmp $root/tmp"; else tmp="mount -t tmpfs tmpfs $root/tmp"; fi
     mount -t proc proc "$root/proc" && mount --rbind /dev "$root/dev" &&
-    mount -t tmpfs tmpfs "$root/tmp" && mount --bind "$here" "$root$here" &&
-    cd / && exec chroot "$root" "$@"' sh "$root" "$_here" "$@"
+    $tmp && mount --bind "$here" "$root$here" &&
+    cd / && exec chroot "$root" "$@"' sh "$root" "$_here" "${SUNLAPSE_ROOT_SHARE_TMP:-0}" "$@"
 }
 
 if [ "${BASH_SOURCE[0]}" = "$0" ]; then

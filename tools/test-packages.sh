@@ -13,6 +13,7 @@
 # In each, the saved file is opened again (tools/check_saved_scene.py): the
 # lamp must match the track on every frame, and the AR setup (compositor
 # included) must render a frame. The tracks must match the source tree's.
+# (d) The window tests (tests/ui, Xvfb) run in sid's Blender 5.x too.
 #   bash tools/test-packages.sh        (ends "test-packages: PASS" or exits 1)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -127,6 +128,16 @@ echo "== (b) Blender 4.3 / Python 3.13 from trixie: the extension"
 extension_run 4.3 trixie
 echo "== (c) Blender 5.x / Python 3.14 from sid: the extension"
 extension_run 5 sid
+
+echo "== (d) the window tests (Xvfb) in sid's Blender 5.x, the core from its extension"
+# The root shares the machine's /tmp: the X server's socket and cookie, and
+# pytest's folders.
+site=$(ls -d "$out"/user-5/extensions/.local/lib/python3*/site-packages)
+(cd "$here" && SUNLAPSE_ROOT_SHARE_TMP=1 SUNLAPSE_UI_SYS_PATH="$site" \
+  SUNLAPSE_UI_BLENDER="bash $here/tools/pkgroots.sh run sid /usr/bin/blender" \
+  /usr/bin/python3 -m pytest -q -p no:cacheprovider tests/ui) >"$out/ui-5.log" 2>&1 \
+  || { tail -30 "$out/ui-5.log"; exit 1; }
+tail -1 "$out/ui-5.log" | sed 's/^/  /'
 
 echo "== accuracy against the truth, and each package against the source tree"
 /usr/bin/python3 - "$here" "$scene/truth.sun.json" "$out" "$tolerance_deg" <<'PY'
