@@ -381,7 +381,10 @@ void BindEstimate(py::module_& m) {
       .field("width", &FrameStreamOptions::width,
              "gray frames reduced to this width (0: as decoded)")
       .field("height", &FrameStreamOptions::height,
-             "gray frames reduced to this height (0: as decoded)");
+             "gray frames reduced to this height (0: as decoded)")
+      .field("decode_threads", &FrameStreamOptions::decode_threads,
+             "threads decoding an image sequence side by side (0: one per "
+             "core)");
   py::class_<FrameSource>(m, "FrameSource",
                           "Where a pass over a clip takes its frames from.");
   py::class_<FrameList, FrameSource>(

@@ -5,8 +5,10 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <utility>
 
@@ -24,6 +26,9 @@ void FrameStreamOptions::Check() const {
   if (width < 0 || height < 0 || (width == 0) != (height == 0))
     throw std::invalid_argument(
         "width and height must both be > 0, or both 0 (the decoded size)");
+  if (decode_threads < 0 || decode_threads > 16)
+    throw std::invalid_argument(
+        "decode_threads must be in [0, 16] (0: one per core)");
   if (bgr_width < 0 || bgr_height < 0 || (bgr_width == 0) != (bgr_height == 0))
     throw std::invalid_argument(
         "bgr_width and bgr_height must both be > 0, or both 0 (the decoded "
@@ -32,58 +37,64 @@ void FrameStreamOptions::Check() const {
 
 struct FrameStream::Impl {
   FrameStreamOptions options;
+  std::string path;
   std::vector<int> indices;
   VideoReader reader;
   std::mutex mutex;
   std::condition_variable ready, space;
   std::deque<StreamedFrame> queue;
   size_t handed = 0;   // frames given to the consumer
+  size_t taken = 0;    // frames a decoding thread has started on
+  size_t queued = 0;   // frames put in the queue (in order)
   int last_near = -1;  // the last frame decoded (near: never twice)
   bool stop = false;
   double wait_seconds = 0.0;
-  std::thread thread;
+  int decoders = 1;  // decoding threads (set before any starts)
+  std::vector<std::thread> threads;
 
-  Impl(const std::string& path, std::vector<int> idx,
-       const FrameStreamOptions& o)
+  Impl(const std::string& p, std::vector<int> idx, const FrameStreamOptions& o)
       : options(o),
+        path(p),
         indices(std::move(idx)),
-        reader(path),
+        reader(p),
         table(LinearGrayTable(o.gamma)) {}
 
   // Float frames whose consumers have let go are filled again: a fresh
   // 8 MB buffer per 1080p frame cost as much as the conversion itself (page
   // faults). A buffer is free when the pool holds its only reference.
+  std::mutex pool_mutex;
   std::vector<cv::Mat> pool;
   cv::Mat table;  // 8-bit value -> linear float
 
   cv::Mat Recycled(int rows, int cols) {
+    std::lock_guard<std::mutex> lock(pool_mutex);
     for (const cv::Mat& m : pool) {
       if (m.rows == rows && m.cols == cols && m.u != nullptr &&
           m.u->refcount == 1)
         return m;
     }
     cv::Mat m(rows, cols, CV_32F);
-    if (pool.size() < static_cast<size_t>(options.queue_frames) + 4)
+    if (pool.size() < static_cast<size_t>(options.queue_frames + 4 + decoders))
       pool.push_back(m);
     return m;
   }
 
-  StreamedFrame Decode(int index) {
+  // `r`: this thread's reader. `near`: the near rule applies (one thread).
+  StreamedFrame Decode(VideoReader& r, int index, bool near) {
     StreamedFrame f;
     f.index = index;
     // Near: the key frame before the index when it is one not handed out
     // yet (one decode after a seek), else the exact frame.
-    const int key = options.near ? reader.KeyFrameAtOrBefore(index) : -1;
+    const int key = near ? r.KeyFrameAtOrBefore(index) : -1;
     if (key > last_near) {
-      f.index = reader.SeekNear(key);
+      f.index = r.SeekNear(key);
       if (f.index < 0) {
         f.message = "the clip has no frame " + std::to_string(index + 1);
         f.index = index;
         return f;
       }
       last_near = f.index;
-    } else if (index < 0 ||
-               (reader.position() != index && !reader.Seek(index))) {
+    } else if (index < 0 || (r.position() != index && !r.Seek(index))) {
       f.message = "the clip has no frame " + std::to_string(index + 1);
       return f;
     }
@@ -91,15 +102,15 @@ struct FrameStream::Impl {
     // the decoder's luma (no colour conversion).
     const cv::Size size(options.width, options.height);
     cv::Mat gray8, bgr;
-    if (!(options.keep_bgr ? reader.ReadGrayAndBgr(&gray8, size, &bgr,
-                                                   cv::Size(options.bgr_width,
-                                                            options.bgr_height))
-                           : reader.ReadGray(&gray8, size))) {
+    if (!(options.keep_bgr ? r.ReadGrayAndBgr(&gray8, size, &bgr,
+                                              cv::Size(options.bgr_width,
+                                                       options.bgr_height))
+                           : r.ReadGray(&gray8, size))) {
       f.message = "the clip ended before frame " + std::to_string(f.index + 1);
       return f;
     }
-    f.report = reader.last_frame();
-    last_near = std::max(last_near, f.index);
+    f.report = r.last_frame();
+    if (near) last_near = std::max(last_near, f.index);
     if (gray8.empty()) {
       f.status = StreamedFrame::Status::kUnusable;
       f.message =
@@ -115,26 +126,66 @@ struct FrameStream::Impl {
     return f;
   }
 
-  void Run() {
-    for (int index : indices) {
+  StreamedFrame SafeDecode(VideoReader& r, int index, bool near) {
+    try {
+      return Decode(r, index, near);
+    } catch (const std::exception& e) {  // e.g. out of memory on one frame
       StreamedFrame f;
-      try {
-        f = Decode(index);
-      } catch (const std::exception& e) {  // e.g. out of memory on one frame
-        f = StreamedFrame();
-        f.index = index;
-        f.status = StreamedFrame::Status::kUnusable;
-        f.message = e.what();
+      f.index = index;
+      f.status = StreamedFrame::Status::kUnusable;
+      f.message = e.what();
+      return f;
+    }
+  }
+
+  // One decoding thread: takes the next frame not started, decodes it, and
+  // queues it in its turn (a thread ahead waits for the ones before).
+  void Run(VideoReader& r, bool near) {
+    while (true) {
+      size_t k;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (stop || taken >= indices.size()) return;
+        k = taken++;
       }
+      StreamedFrame f = SafeDecode(r, indices[k], near);
       std::unique_lock<std::mutex> lock(mutex);
       space.wait(lock, [&] {
-        return stop || queue.size() < static_cast<size_t>(options.queue_frames);
+        return stop ||
+               (queued == k &&
+                queue.size() < static_cast<size_t>(options.queue_frames));
       });
       if (stop) return;
       queue.push_back(std::move(f));
+      ++queued;
       ready.notify_one();
+      space.notify_all();  // the thread with the next frame may go on
     }
   }
+
+  void Start() {
+    // An image sequence's frames decode side by side, each thread with its
+    // own reader; a movie's in one thread (its decoder has threads).
+    int n = 1;
+    if (reader.is_sequence()) {
+      const int cores =
+          std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+      n = options.decode_threads > 0 ? options.decode_threads : cores;
+      n = std::max(1, std::min<int>(n, static_cast<int>(indices.size())));
+    }
+    decoders = n;
+    extra_readers.reserve(n - 1);
+    for (int t = 1; t < n; ++t)
+      extra_readers.push_back(std::make_unique<VideoReader>(path));
+    const bool near = options.near && n == 1;
+    threads.emplace_back([this, near] { Run(reader, near); });
+    for (auto& r : extra_readers) {
+      VideoReader* own = r.get();
+      threads.emplace_back([this, own] { Run(*own, false); });
+    }
+  }
+
+  std::vector<std::unique_ptr<VideoReader>> extra_readers;
 };
 
 FrameStream::FrameStream(const std::string& path, std::vector<int> indices,
@@ -155,7 +206,7 @@ FrameStream::FrameStream(const std::string& path, std::vector<int> indices,
     if (known && static_cast<int>(keys.size()) >= options.near_min_frames)
       impl_->indices = keys;
   }
-  impl_->thread = std::thread([this] { impl_->Run(); });
+  impl_->Start();
 }
 
 FrameStream::~FrameStream() {
@@ -164,7 +215,7 @@ FrameStream::~FrameStream() {
     impl_->stop = true;
   }
   impl_->space.notify_all();
-  impl_->thread.join();
+  for (std::thread& t : impl_->threads) t.join();
 }
 
 bool FrameStream::Next(StreamedFrame* frame) {
@@ -179,7 +230,7 @@ bool FrameStream::Next(StreamedFrame* frame) {
   *frame = std::move(s.queue.front());
   s.queue.pop_front();
   ++s.handed;
-  s.space.notify_one();
+  s.space.notify_all();  // the thread holding the next frame waits on it
   return true;
 }
 

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -182,6 +183,42 @@ TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
   got.clear();
   while (keys.Next(&f)) got.push_back(f.index);
   EXPECT_EQ(got, (std::vector<int>{0, 30, 90}));
+}
+
+TEST(FrameStream, DecodesASequenceOnSeveralThreadsInOrder) {
+  // Stills are independent: several threads decode them side by side, and
+  // the frames still come out in the order asked, each exactly what one
+  // thread gives, a missing file at its own place.
+  const Sequence seq("threads", 40);
+  fs::remove(seq.Path(17));
+  std::vector<int> indices;
+  for (int i = 0; i < 40; ++i) indices.push_back(i);
+  std::swap(indices[3], indices[30]);  // and not only forward
+  auto read_all = [&](int threads) {
+    FrameStreamOptions o;
+    o.queue_frames = 2;
+    o.decode_threads = threads;
+    FrameStream s(seq.Path(0), indices, o);
+    std::vector<StreamedFrame> out;
+    StreamedFrame f;
+    while (s.Next(&f)) out.push_back(f);
+    return out;
+  };
+  const std::vector<StreamedFrame> one = read_all(1);
+  for (int threads : {2, 3, 8}) {
+    const std::vector<StreamedFrame> many = read_all(threads);
+    ASSERT_EQ(many.size(), indices.size());
+    for (size_t k = 0; k < indices.size(); ++k) {
+      EXPECT_EQ(many[k].index, indices[k]) << threads;
+      EXPECT_EQ(many[k].status, one[k].status) << k;
+      if (indices[k] == 17) {
+        EXPECT_EQ(many[k].status, StreamedFrame::Status::kUnusable);
+      } else {
+        ASSERT_EQ(many[k].status, StreamedFrame::Status::kOk) << k;
+        EXPECT_EQ(cv::norm(many[k].gray, one[k].gray, cv::NORM_INF), 0.0);
+      }
+    }
+  }
 }
 
 TEST(FrameStream, StopsWhenDroppedHalfWay) {

@@ -37,6 +37,11 @@ struct FrameStreamOptions {
   // decoded 8-bit luma, before linearising; 0 x 0 keeps the decoded size.
   // Reducing first costs a fraction of linearising the whole frame.
   int width = 0, height = 0;
+  // Threads decoding an image sequence's frames side by side (its images
+  // are independent; a movie's frames are not, and FFmpeg threads its own
+  // decoder): 0 one per core. Frames still come out in order, and at most
+  // queue_frames + decode_threads are held at once.
+  int decode_threads = 0;
   void Check() const;
 };
 
