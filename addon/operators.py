@@ -28,22 +28,22 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             t0 = time.perf_counter()
             model, cam, clip = job.gather_all(context, settings)
             t1 = time.perf_counter()
-            gather.build_scene(model)
-            gather.build_camera(cam)
+            scene_n, camera_n = gather.build_scene(model), gather.build_camera(cam)
             t2 = time.perf_counter()
+            ground = job.ground_names(settings, model) or gather.guess_ground(model, cam)
+            unseen = job.view_doubts(model, cam, scene_n, camera_n, ground)
         except (gather.SceneError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         for w in cam.warnings:
             self.report({"WARNING"}, w)
-        ground = job.ground_names(settings, model) or gather.guess_ground(model, cam)
         msg = (f"{model.num_triangles} triangles in {len(model.names)} objects "
                f"(gathered in {t1 - t0:.2f} s, BVH {t2 - t1:.2f} s); camera "
                f"'{cam.name}'; clip '{clip.name}' {clip.width}x{clip.height}, "
                f"frames {clip.frame_start}-{clip.frame_end}; ground: "
                f"{', '.join(ground) or 'none found'}")
         level = "INFO"
-        doubts = gather.ground_doubts(model, ground) if ground else [
+        doubts = unseen + gather.ground_doubts(model, ground) if ground else [
             "No ground in view: model the surface the shadows fall on (a plane under the "
             "objects) and pick it as Ground"]
         if doubts:

@@ -144,10 +144,31 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
             track_extra["gps_deg"] = list(gps)
     if options.smoothing == "physical":
         place_and_time(context, settings, options, gps, place)
-    for w in cam.warnings + gather.ground_doubts(model, names):
+    scene, camera = gather.build_scene(model), gather.build_camera(cam)
+    doubts = view_doubts(model, cam, scene, camera, names)
+    for w in cam.warnings + gather.ground_doubts(model, names) + doubts:
         if warnings is None:  # scripted runs: on stdout with the run's other warnings
             print(f"sunlapse: warning: {w}")
         else:
             warnings.append(w)
-    return RunJob(gather.build_scene(model), gather.build_camera(cam), clip,
-                  list(range(frames[0], frames[1] + 1)), options, track_extra)
+    return RunJob(scene, camera, clip, list(range(frames[0], frames[1] + 1)), options,
+                  track_extra)
+
+
+def view_doubts(model, cam, scene, camera, ground: List[str]) -> List[str]:
+    """What the camera sees of the model: a SceneError when nothing (a camera
+    not matched to the footage, or aimed away), warnings for a ground that
+    is out of view."""
+    seen = gather.objects_in_view(scene, camera, cam)
+    if not seen:
+        raise gather.SceneError(
+            f"The camera '{cam.name}' sees none of the model ({len(model.names)} objects): "
+            f"match it to the footage (Solve Camera, or place it by hand) so that the "
+            f"model lies over the objects it stands for")
+    out = []
+    for name in ground:
+        if not any(i in seen for i in model.ids_of([name])):
+            out.append(f"the ground '{name}' is out of the camera's view: the shadows are looked "
+                       f"for on a surface the footage does not show (pick the surface they fall "
+                       f"on as Ground)")
+    return out

@@ -120,6 +120,39 @@ def test_scripted_run_fails_with_one_line_reason(empty_scene, tmp_path, missing,
     assert not os.path.exists(out)
 
 
+def test_a_camera_that_sees_no_model_is_a_one_line_user_error(empty_scene, tmp_path):
+    """It was "internal error: ValueError ..." with a traceback (exit 4)."""
+    blend = make_blend(tmp_path, camera=False)
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scenes.add_camera(bpy.context.scene, (0, -12, 6), (0, -40, 6))  # looking away
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    out = str(tmp_path / "out.sun.json")
+    proc = run_estimate(blend, out)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    lines = error_lines(proc)
+    assert len(lines) == 1 and "sees none of the model" in lines[0], proc.stderr
+    assert "Traceback" not in proc.stdout + proc.stderr
+    assert not os.path.exists(out)
+    # Check Scene says the same, as an error, before any run.
+    with pytest.raises(RuntimeError, match="sees none of the model"):
+        bpy.ops.clip.sunlapse_check_scene()
+
+
+def test_a_ground_out_of_view_is_named_in_a_warning(monkeypatch):
+    from types import SimpleNamespace as NS
+    from sunlapse.blender import gather, job
+    model = NS(names=["Plane", "Box"], ids_of=lambda names: [
+        i for i, n in enumerate(["Plane", "Box"]) if n in names])
+    cam = NS(name="Camera")
+    monkeypatch.setattr(gather, "objects_in_view", lambda *a: {1: 0.3})  # only the box
+    doubts = job.view_doubts(model, cam, None, None, ["Plane"])
+    assert len(doubts) == 1 and "'Plane' is out of the camera's view" in doubts[0]
+    assert job.view_doubts(model, cam, None, None, ["Box"]) == []
+    monkeypatch.setattr(gather, "objects_in_view", lambda *a: {})
+    with pytest.raises(gather.SceneError, match="sees none of the model"):
+        job.view_doubts(model, cam, None, None, ["Plane"])
+
+
 def test_scripted_run_reports_a_clip_missing_on_disk(empty_scene, tmp_path):
     blend = make_blend(tmp_path)
     for f in os.listdir(tmp_path / "frames"):
