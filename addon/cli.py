@@ -355,10 +355,6 @@ def _run(argv, interrupt):
         clip, numbers, options = run.clip, run.frames, run.options
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)
-        if options.frame_times and len(numbers) > 1 and \
-                len({options.frame_times[f] for f in numbers}) < 2:
-            print(f"sunlapse: warning: the times file gives every frame of {frames[0]}-"
-                  f"{frames[1]} the same time: frames are smoothed in frame order")
         interrupt.check()
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
-from typing import List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence
 
 
 class ClockError(ValueError):
@@ -82,6 +82,25 @@ def chronological(frames: Sequence[int], times: Optional[Sequence[dt.datetime]])
         return list(range(n))
     known: Sequence[dt.datetime] = times
     return sorted(range(n), key=lambda i: (known[i], frames[i]))
+
+
+def orderless(times: Sequence[dt.datetime]) -> Optional[str]:
+    """Why `times` say nothing of the order the frames were taken in, or
+    None when they do: at least half the frames share their time with
+    another frame (every frame the same time; dates without times of day,
+    every frame of a day at midnight)."""
+    if len(times) < 2:
+        return None
+    counts: Dict[dt.datetime, int] = {}
+    for t in times:
+        counts[t] = counts.get(t, 0) + 1
+    shared = sum(c for c in counts.values() if c > 1)
+    if 2 * shared < len(times):
+        return None
+    if len(counts) == 1:
+        return "every frame has the same time"
+    return (f"{shared} of {len(times)} frames share their time with another "
+            f"({len(counts)} different times: dates without times of day?)")
 
 
 def seconds_since(times: Sequence[dt.datetime]) -> List[float]:

@@ -57,7 +57,7 @@ class ProblemKind(str, Enum):
 @dataclass(frozen=True)
 class Problem:
     """Something a stage of the run reports to the user, in their words.
-    stage: "estimate", "tracking", "smoothing" or "model"."""
+    stage: "estimate", "tracking", "smoothing", "model" or "times"."""
     stage: str
     kind: ProblemKind
     message: str

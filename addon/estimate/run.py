@@ -3,6 +3,7 @@ thesis's baseline and the tracker from a given Sun (estimate/thesis.py)."""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Callable, Optional, Sequence
 
@@ -27,6 +28,12 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
             raise EstimateError(f"the times file has no time for frame(s) "
                                 f"{', '.join(map(str, missing[:5]))}{more}")
         times = [options.frame_times[f] for f in frames]
+    orderless = clock.orderless(times) if times is not None else None
+    if orderless is not None:
+        # Times that cannot order the frames would order them wrongly (and
+        # smooth over no time at all): the run is as untimed, and says so.
+        options = dataclasses.replace(options, frame_times=None)
+        times = None
     # Frames are visited in the order they were taken (decode order when the
     # times are unknown): the tracker follows the shadow between neighbours
     # in time, so an out-of-order frame is tracked where it belongs.
@@ -40,6 +47,10 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
         method={"initial": options.method, "tracking": options.method,
                 "smoothing": options.smoothing,
                 "options": {"gamma": gamma(options.method)}})
+    if orderless is not None:
+        track.report("times", trackfile.ProblemKind.FELL_BACK,
+                     f"the frame times were not used ({orderless}): the frames are taken in "
+                     f"their order in the clip, as without times")
     if times is not None:
         late = clock.out_of_order(frames, times)
         track.extra["frame_times"] = {"first_utc": min(times).isoformat(),

@@ -258,10 +258,19 @@ def test_every_frame_at_one_time_does_not_abort_the_process(tiny_plaza, tmp_path
         # Measured frames (the case that reached LAPACK: two or more).
         assert sum(f["raw_zenith_deg"] is not None for f in track["frames"]) >= 2
         assert all(f["zenith_deg"] is not None for f in track["frames"])
+        # Times that cannot order the frames are not used, and the run says so.
+        said = [p["message"] for p in track["problems"] if p["stage"] == "times"]
+        assert len(said) == 1 and "same time" in said[0]
         if smoothing == "two_pass":
             assert "same time" in proc.stdout
-        else:  # the fit cannot run; it falls back and says why
-            assert "same time" in track["smoothing_message"]
+            # As accurate as no times: it is the untimed run.
+            untimed = str(tmp_path / "untimed.json")
+            assert run_estimate(blend, untimed).returncode == 0
+            plain = json.load(open(untimed))["frames"]
+            for a, b in zip(track["frames"], plain):
+                assert abs(a["zenith_deg"] - b["zenith_deg"]) < 1e-9
+                assert abs(a["azimuth_deg"] - b["azimuth_deg"]) < 1e-9
+        else:  # the fit has no times to run on; it falls back and says why
             assert track["method"]["smoothing"] == "two_pass"
 
 

@@ -63,3 +63,17 @@ def test_local_start_is_hours_after_midnight_in_the_zone():
     t = clock.local_start(dt.date(2005, 3, 21), 10.5, clock.zone("", 1.0))
     assert t.isoformat() == "2005-03-21T10:30:00+01:00"
     assert t.astimezone(dt.timezone.utc).hour == 9
+
+
+def test_times_that_cannot_order_the_frames_are_told_apart():
+    t0 = dt.datetime(2025, 6, 21, 10, 0, tzinfo=dt.timezone.utc)
+    step = [t0 + dt.timedelta(minutes=10 * k) for k in range(10)]
+    assert clock.orderless(step) is None
+    assert clock.orderless(step[:1]) is None
+    # A burst's duplicate here and there still orders the clip.
+    assert clock.orderless(step[:9] + [step[8]]) is None
+    assert "same time" in clock.orderless([t0] * 5)
+    # Dates without times of day: every frame of a day at midnight.
+    days = [dt.datetime(2025, 6, 21 + k // 3, tzinfo=dt.timezone.utc) for k in range(9)]
+    why = clock.orderless(days)
+    assert why is not None and "9 of 9 frames" in why and "3 different times" in why
