@@ -10,6 +10,7 @@ from bpy_extras.io_utils import ExportHelper
 
 from .blender import ar, background, export, gather, job, keys, lamp, place, report, store
 from .blender.background import RUN, redraw_all, running
+from .panels import wrapped
 from .estimate import errors, frames as clip_frames, native_loader, thesis
 from .estimate import options as estimate_options, run as estimate_run
 from .core import angles, clock, trackfile
@@ -260,8 +261,7 @@ class CLIP_OT_sunlapse_show_text(bpy.types.Operator):
         return context.window_manager.invoke_popup(self, width=520)
 
     def draw(self, context):
-        from . import panels
-        panels.wrapped(self.layout, context, self.text, max_lines=60, width_px=500)
+        wrapped(self.layout, context, self.text, max_lines=60, width_px=500)
 
     def execute(self, context):
         print(f"sunlapse: {self.text}")  # from a script: to the console

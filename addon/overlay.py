@@ -109,7 +109,7 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
     h = 190 * scale
     size = int(11 * scale)
     x0, y0 = left + 10 * scale, 30 * scale
-    blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
+    compat.font_size(size)
     plot = plot_layout(track, frame, x0, y0, w, h, size,
                        lambda text, _: blf.dimensions(0, text)[0])
     if plot is None or w < 80:
@@ -195,7 +195,7 @@ def _draw_overlay():
         gpu.state.point_size_set(7.0)
         batch_for_shader(shader, "POINTS", {"pos": [a, b]}).draw(shader)
         blf.position(0, b[0] + 8, b[1] + 8, 0)
-        blf.size(0, 12) if bpy.app.version >= (4, 0, 0) else blf.size(0, 12, 72)
+        compat.font_size(12)
         blf.color(0, 1, 1, 1, 1)
         blf.draw(0, f"shadow tracked, confidence {est.confidence:.2f}" if est.reason is None
                  else est.reason[:60])

@@ -39,11 +39,7 @@ def wrapped(layout, context, text, icon="NONE", max_lines=6, width_px=None):
     width = width_px if width_px is not None else \
         (region.width if region is not None else 300) - 72 * scale \
         - (20 * scale if icon != "NONE" else 0)
-    size = compat.label_points(context) * scale
-    if bpy.app.version >= (4, 0, 0):
-        blf.size(0, size)
-    else:
-        blf.size(0, size, 72)
+    compat.font_size(compat.label_points(context) * scale)
     lines = _wrap(text, width, lambda t: blf.dimensions(0, t)[0])
     col = layout.column(align=True)
     for k, line in enumerate(lines[:max_lines]):

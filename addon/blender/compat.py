@@ -1,7 +1,6 @@
 """Blender's APIs that changed between the versions sunlapse runs in, in one
 place: the glue calls these instead of checking versions itself."""
 
-import glob
 import os
 
 import bpy
@@ -37,6 +36,15 @@ def uniform_color_shader():
         return gpu.shader.from_builtin("UNIFORM_COLOR")
     except ValueError:
         return gpu.shader.from_builtin("2D_UNIFORM_COLOR")
+
+
+def font_size(size):
+    """Sets the UI font's size for blf drawing: 4.0 dropped the dpi argument."""
+    import blf
+    if bpy.app.version >= (4, 0, 0):
+        blf.size(0, size)
+    else:
+        blf.size(0, size, 72)
 
 
 def label_points(context):
@@ -134,9 +142,6 @@ def file_output(tree, folder, name):
 def _output_file(folder, name, frame):
     """The file the File Output node wrote for frame `frame`: NAME0012.exr
     before 5.0, NAME.exr for a still from 5.0 (looked up, not assumed)."""
-    for candidate in (f"{name}{frame:04d}.exr", f"{name}.exr"):
-        path = os.path.join(folder, candidate)
-        if os.path.exists(path):
-            return path
-    found = sorted(glob.glob(os.path.join(folder, f"{name}*.exr")))
-    return found[0] if found else os.path.join(folder, f"{name}{frame:04d}.exr")
+    numbered = os.path.join(folder, f"{name}{frame:04d}.exr")
+    still = os.path.join(folder, f"{name}.exr")
+    return still if os.path.exists(still) and not os.path.exists(numbered) else numbered

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import List, Optional, Sequence, Set
 
 import bpy
 import numpy as np
@@ -453,19 +453,16 @@ def build_scene(model: Model):
 VIEW_GRID = (64, 36)
 
 
-def objects_in_view(scene, camera, info: CameraInfo) -> Dict[int, float]:
-    """{object id: share of the view it covers} through the camera, from a
-    grid of VIEW_GRID rays (empty: the camera sees none of the model)."""
-    import numpy as np
+def objects_in_view(scene, camera, info: CameraInfo) -> Set[int]:
+    """The ids of the objects a grid of VIEW_GRID camera rays hits (empty:
+    the camera sees none of the model)."""
     w, h = info.params["width"], info.params["height"]
     gx, gy = VIEW_GRID
-    xs = (np.arange(gx) + 0.5) * w / gx - 0.5
-    ys = (np.arange(gy) + 0.5) * h / gy - 0.5
-    px = np.array([(x, y) for y in ys for x in xs], dtype=np.float64)
+    xs, ys = np.meshgrid((np.arange(gx) + 0.5) * w / gx - 0.5,
+                         (np.arange(gy) + 0.5) * h / gy - 0.5)
+    px = np.ascontiguousarray(np.stack([xs.ravel(), ys.ravel()], axis=1), dtype=np.float64)
     hits = scene.intersect_pixels(camera, px)
-    ids = np.asarray(hits["object_id"])[np.asarray(hits["hit"], dtype=bool)]
-    values, counts = np.unique(ids, return_counts=True)
-    return {int(v): float(c) / len(px) for v, c in zip(values, counts)}
+    return {int(i) for i in np.asarray(hits["object_id"])[np.asarray(hits["hit"], dtype=bool)]}
 
 
 def marked_points(clip, frame):

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import datetime as dt
 import math
-from typing import Dict, List, Optional, Sequence
+from collections import Counter
+from typing import List, Optional, Sequence
 
 
 class ClockError(ValueError):
@@ -91,9 +92,7 @@ def orderless(times: Sequence[dt.datetime]) -> Optional[str]:
     every frame of a day at midnight)."""
     if len(times) < 2:
         return None
-    counts: Dict[dt.datetime, int] = {}
-    for t in times:
-        counts[t] = counts.get(t, 0) + 1
+    counts = Counter(times)
     shared = sum(c for c in counts.values() if c > 1)
     if 2 * shared < len(times):
         return None

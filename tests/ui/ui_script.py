@@ -187,7 +187,7 @@ def label_fits():
     scale = bpy.context.preferences.system.ui_scale
     from sunlapse.blender import compat
     size = compat.label_points(bpy.context) * scale
-    blf.size(0, size) if bpy.app.version >= (4, 0, 0) else blf.size(0, size, 72)
+    compat.font_size(size)
     unit = 20 * scale
     # The sidebar keeps a tab column and panel margins; sub-panels indent.
     content = region.width - 1.2 * unit - 1.6 * unit
