@@ -157,7 +157,7 @@ void BindSky(py::module_& m) {
       "solve_sun_path",
       [](const SkyEvidence& e, const std::vector<double>& times_s,
          const std::vector<uint8_t>& segment_start, const SunPathOptions& o,
-         const py::object& prior_in) {
+         const py::object& prior_in, const std::vector<uint8_t>& ignored) {
         std::vector<Eigen::Vector3d> prior;
         if (!prior_in.is_none()) {
           const auto a =
@@ -174,17 +174,19 @@ void BindSky(py::module_& m) {
         SunPathResult r;
         {
           py::gil_scoped_release release;
-          r = SolveSunPath(e, times_s, segment_start, o, prior);
+          r = SolveSunPath(e, times_s, segment_start, o, prior, ignored);
         }
         return r;
       },
       py::arg("evidence"), py::arg("times_s") = std::vector<double>(),
       py::arg("segment_start") = std::vector<uint8_t>(),
       py::arg("options") = SunPathOptions(), py::arg("prior") = py::none(),
+      py::arg("ignored") = std::vector<uint8_t>(),
       "The Sun's path over the evidence's frames (sun_path.h): per frame a "
       "grid direction, "
       "jump flags, whether the frame's evidence supports it. prior: None or "
-      "(N, 3) directions toward the Sun per frame (NaN rows: none).");
+      "(N, 3) directions toward the Sun per frame (NaN rows: none); ignored: "
+      "empty or 1 per frame whose evidence is not used.");
 }
 
 }  // namespace sunlapse::python

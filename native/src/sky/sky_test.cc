@@ -216,6 +216,40 @@ TEST(SunPath, KnownTimesBoundTheStepAndSegmentsRestart) {
 // prior the path follows them; with the Sun's circle as the prior it stays
 // with the Sun, and the frames' own margins still say their evidence
 // disagrees (a prior does not make a frame measured).
+// Frames found without direct sunlight: their evidence is left out and the
+// path carries them, as frames without evidence.
+TEST(SunPath, IgnoredFramesAreCarriedNotFollowed) {
+  const int n = 16;
+  Clip clip(n);
+  SkyEvidence ev(clip.scene, clip.cam, SkyEvidenceOptions());
+  ev.SetReference(Spread(clip.frames, 8));
+  const std::vector<int> misled = {5, 6, 7, 8};
+  std::vector<uint8_t> ignored(n, 0);
+  for (int f = 0; f < n; ++f) {
+    const bool bad = std::find(misled.begin(), misled.end(), f) != misled.end();
+    double zenith, azimuth;
+    AnglesFromSunInWorld(clip.truth[f], &zenith, &azimuth);
+    ev.AddFrame(bad ? testing::RenderLambertian(clip.scene, clip.cam,
+                                                Sun(zenith + 15.0, azimuth),
+                                                testing::TexturedGround(f + 1))
+                    : clip.frames[f]);
+    ignored[f] = bad;
+  }
+  const SunPathResult path =
+      SolveSunPath(ev, {}, {}, SunPathOptions(), {}, ignored);
+  ASSERT_EQ(path.status, SunPathResult::Status::kSuccess) << path.message;
+  for (int f = 0; f < n; ++f) {
+    EXPECT_LT(PathError(ev, path, clip.truth, f), kPathToleranceDeg)
+        << "frame " << f;
+    EXPECT_EQ(path.measured[f], !ignored[f]) << "frame " << f;
+  }
+  EXPECT_THROW(SolveSunPath(ev, {}, {}, SunPathOptions(), {}, {1, 0}),
+               std::invalid_argument);
+  const SunPathResult none = SolveSunPath(ev, {}, {}, SunPathOptions(), {},
+                                          std::vector<uint8_t>(n, 1));
+  EXPECT_EQ(none.status, SunPathResult::Status::kNoEvidence);
+}
+
 TEST(SunPath, APriorHoldsThePathAgainstMisleadingFrames) {
   const int n = 16;
   Clip clip(n);

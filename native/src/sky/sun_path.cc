@@ -45,7 +45,8 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
                            const std::vector<double>& times_s,
                            const std::vector<uint8_t>& segment_start,
                            const SunPathOptions& o,
-                           const std::vector<Eigen::Vector3d>& prior) {
+                           const std::vector<Eigen::Vector3d>& prior,
+                           const std::vector<uint8_t>& ignored) {
   o.Check();
   const int T = evidence.num_frames();
   const SkyGrid& grid = evidence.grid();
@@ -56,6 +57,9 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
           "segment_start: one flag per frame, or none");
   Require(prior.empty() || static_cast<int>(prior.size()) == T,
           "prior: one direction per frame, or none");
+  Require(ignored.empty() || static_cast<int>(ignored.size()) == T,
+          "ignored: one flag per frame, or none");
+  auto used = [&](int t) { return ignored.empty() || !ignored[t]; };
   SunPathResult out;
   out.direction.assign(T, -1);
   out.jump_before.assign(T, 0);
@@ -72,7 +76,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   // Each frame's cost of a direction, relative to the frame's best (0 there;
   // 0 everywhere on a frame without evidence, which is then carried).
   auto evidence_cost = [&](int t, int d) {
-    return scores[static_cast<size_t>(t) * D + d] / 10.0;
+    return used(t) ? scores[static_cast<size_t>(t) * D + d] / 10.0 : 0.0;
   };
   // The prior's cost of a direction on a frame, in the evidence's units,
   // from its angle to the frame's prior direction (none: no prior there).
@@ -96,7 +100,8 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
                : c + std::min(o.prior_max_cost, o.prior_weight * off * off);
   };
   bool any = false;
-  for (int t = 0; t < T && !any; ++t) any = evidence.Significance(t) > 0.0;
+  for (int t = 0; t < T && !any; ++t)
+    any = used(t) && evidence.Significance(t) > 0.0;
   if (!any) {
     out.status = SunPathResult::Status::kNoEvidence;
     out.message = "no frame shows shadows the model can cast";
@@ -262,7 +267,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     out.explained[t] = static_cast<float>(evidence.BestExplained(t));
     out.significance[t] = static_cast<float>(evidence.Significance(t));
     out.margin[t] = static_cast<float>(rival - own);
-    out.measured[t] = out.significance[t] >= o.min_significance &&
+    out.measured[t] = used(t) && out.significance[t] >= o.min_significance &&
                       out.margin[t] >= o.min_margin;
   }
   out.status = SunPathResult::Status::kSuccess;

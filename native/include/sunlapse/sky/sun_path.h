@@ -85,11 +85,15 @@ struct SunPathResult {
 // prior: none, or one unit vector toward the Sun per frame in the world
 // frame (a non-finite one: no prior on that frame), added to the frames'
 // costs as options.prior_* say. Margins and `measured` stay the evidence's
-// own; path_margin includes the prior.
+// own; path_margin includes the prior. ignored: none, or 1 per frame whose
+// evidence is not to be used (found without direct sunlight: ambient
+// shading resembles a high Sun's shadows): such a frame is carried, as one
+// without evidence.
 SunPathResult SolveSunPath(const SkyEvidence& evidence,
                            const std::vector<double>& times_s,
                            const std::vector<uint8_t>& segment_start,
                            const SunPathOptions& options,
-                           const std::vector<Eigen::Vector3d>& prior = {});
+                           const std::vector<Eigen::Vector3d>& prior = {},
+                           const std::vector<uint8_t>& ignored = {});
 
 }  // namespace sunlapse
