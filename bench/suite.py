@@ -1,12 +1,16 @@
 """The randomised scene suite: render (once), estimate as users do, score.
 
-  python3 bench/suite.py [--scenes N] [--seeds 1,2,5-9] [--jobs J]
+  python3 bench/suite.py [--scenes N] [--twilight N] [--seeds 1,2,5-9] [--jobs J]
                          [--estimator-only] [--smoothings two_pass,physical]
                          [--method default] [--cache DIR] [--out FIGURES.json]
 
 Scenes: the fixed members of examples/random_scene.py (the plaza of issue 14,
 twice) and random seeds 1, 2, ... up to --scenes in all (default 32; every
-fifth seed is a room lit through a window). Each is rendered by
+fifth seed is a room lit through a window), then the twilight members
+twilight1 ... up to --twilight (default 8): clips that run past sunset or
+start before sunrise, the Sun 3-8 deg below the horizon at their end, the
+direct light fading out over the last 4 deg above it and the exposure rising
+as the light falls. Each is rendered by
 examples/generate_scene.py --random KEY at 320x180, 32 frames, into
 CACHE/<key>/ (default build/suite-cache/, outside git), and re-rendered only
 when its spec or random_scene.GENERATOR_VERSION changes (the folder's
@@ -15,15 +19,19 @@ cache_key file).
 Each scene's scene.blend is then run exactly as a user would:
   blender -b scene.blend --python examples/run_estimate.py -- --out T --method M
           --smoothing S
-(no --ground: the ground is found by the add-on). Printed per scene: zenith and
+(no --ground: the ground is found by the add-on). Frames are judged where the
+Sun is at least 4 deg up. Printed per scene: zenith and
 azimuth mean/max error, direction mean/max, the estimate's total_s; then the
 pass rate (mean <= 1 deg and max <= 3 deg in zenith and azimuth), the
 confidence calibration (frames with confidence >= 0.8 within 2 deg; frames
-more than 5 deg off at confidence >= 0.8) and the time. Figures only: the
+more than 5 deg off at confidence >= 0.8), the time, and on frames with the
+Sun below the horizon how many the track flags without direct sunlight and
+the highest Sun it answers there. Figures only: the
 exit code is 0 whatever the figures (non-zero only for bad flags).
 """
 import argparse
 import concurrent.futures as cf
+import dataclasses
 import datetime as dt
 import hashlib
 import json
@@ -46,7 +54,10 @@ PASS_MAX_DEG = 3.0
 CONFIDENT = 0.8
 CONFIDENT_WITHIN_DEG = 2.0
 CONFIDENT_WRONG_DEG = 5.0
+# Frames are judged on their Sun where it is at least 4 deg up.
+JUDGED_MAX_ZENITH_DEG = 86.0
 SMOOTHINGS = tuple(options.keys(options.SMOOTHINGS))
+TWILIGHT_SCENES = 8
 
 
 def sun_position():
@@ -58,11 +69,12 @@ def sun_position():
     return _native.sun_position
 
 
-def scene_keys(count, seeds):
+def scene_keys(count, seeds, twilight=0):
     if seeds:
         return seeds
     fixed = sorted(random_scene.FIXED)
-    return (fixed + [str(s) for s in range(1, count + 1)])[:count]
+    return (fixed + [str(s) for s in range(1, count + 1)])[:count] + \
+        [f"{random_scene.TWILIGHT_PREFIX}{s}" for s in range(1, twilight + 1)]
 
 
 def parse_seeds(text):
@@ -74,14 +86,17 @@ def parse_seeds(text):
         if part in random_scene.FIXED:
             keys.append(part)
             continue
-        a, _, b = part.partition("-")
+        prefix = random_scene.TWILIGHT_PREFIX if part.startswith(
+            random_scene.TWILIGHT_PREFIX) else ""
+        a, _, b = part[len(prefix):].partition("-")
         try:
             lo, hi = int(a), int(b or a)
         except ValueError:
             raise argparse.ArgumentTypeError(
-                f"--seeds takes integers, ranges (3-7) or fixed members "
+                f"--seeds takes integers, ranges (3-7), twilight members (twilight1-4) "
+                f"or fixed members "
                 f"({', '.join(sorted(random_scene.FIXED))}), got '{part}'")
-        keys.extend(str(s) for s in range(lo, hi + 1))
+        keys.extend(f"{prefix}{s}" for s in range(lo, hi + 1))
     if not keys:
         raise argparse.ArgumentTypeError("--seeds is empty")
     return keys
@@ -167,11 +182,19 @@ def score(key, folder, track_path, wall_s, error):
         row.update(passed=False, estimated=0)
         return row
     track = trackfile.read_track(track_path)
-    rep = evaluation.evaluate(key, track, truth)
+    # Accuracy is judged where the Sun casts shadows (JUDGED_MAX_ZENITH_DEG);
+    # frames with the Sun below the horizon are judged on their sunlight flag.
+    up = [t for t in truth.frames if t.zenith_deg <= JUDGED_MAX_ZENITH_DEG]
+    rep = evaluation.evaluate(key, track, dataclasses.replace(truth, frames=up))
     by_frame = {f.frame: f for f in track.frames}
-    per_frame = []
+    per_frame, night = [], []
     for t in truth.frames:
         e = by_frame.get(t.frame)
+        if t.zenith_deg > 90.0:
+            night.append({"frame": t.frame, "sunlight": e and e.sunlight and e.sunlight.value,
+                          "zenith_deg": e and e.zenith_deg})
+        if t.zenith_deg > JUDGED_MAX_ZENITH_DEG:
+            continue
         if e is None or not e.has_estimate:
             per_frame.append({"frame": t.frame, "error_deg": None,
                               "confidence": None if e is None else e.confidence})
@@ -181,6 +204,7 @@ def score(key, folder, track_path, wall_s, error):
             evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
         per_frame.append({"frame": t.frame, "error_deg": round(d, 4),
                           "confidence": e.confidence})
+    row["night"] = night
     timing = (track.extra or {}).get("timing", {})
     row.update(estimated=rep.frames_estimated,
                zenith_mean=rep.zenith and rep.zenith.mean, zenith_max=rep.zenith and rep.zenith.max,
@@ -190,7 +214,7 @@ def score(key, folder, track_path, wall_s, error):
                direction_max=rep.direction and rep.direction.max,
                total_s=timing.get("total_s"), per_frame=per_frame)
     # Every frame must be estimated: a missing frame fails the scene.
-    row["passed"] = bool(rep.frames_estimated == len(truth.frames) and rep.zenith and
+    row["passed"] = bool(rep.frames_estimated == len(up) and rep.zenith and
                          rep.zenith.mean <= PASS_MEAN_DEG and rep.zenith.max <= PASS_MAX_DEG and
                          rep.azimuth.mean <= PASS_MEAN_DEG and rep.azimuth.max <= PASS_MAX_DEG)
     return row
@@ -220,6 +244,7 @@ def summary(rows):
     confident = [p for p in frames if p["confidence"] is not None and
                  p["confidence"] >= CONFIDENT and p["error_deg"] is not None]
     times = [r["total_s"] for r in rows if r.get("total_s") is not None]
+    night = [p for r in rows for p in r.get("night", [])]
     return {
         "scenes": len(rows),
         "passed": sum(r["passed"] for r in rows),
@@ -230,6 +255,10 @@ def summary(rows):
         "confident_within_2deg": (sum(p["error_deg"] <= CONFIDENT_WITHIN_DEG for p in confident)
                                   / len(confident)) if confident else None,
         "confident_over_5deg": sum(p["error_deg"] > CONFIDENT_WRONG_DEG for p in confident),
+        "night_frames": len(night),
+        "night_flagged": sum(p["sunlight"] == "no" for p in night),
+        "night_max_altitude_deg": max((90.0 - p["zenith_deg"] for p in night
+                                       if p["zenith_deg"] is not None), default=None),
         "total_s_mean": sum(times) / len(times) if times else None,
         "total_s_max": max(times) if times else None,
         "total_s_sum": sum(times) if times else None,
@@ -247,6 +276,10 @@ def print_summary(s, smoothing):
           f"{s['confident_over_5deg']} more than {CONFIDENT_WRONG_DEG:g} deg off (target 0); "
           f"estimate total_s mean {_f(s['total_s_mean'], 0)} max {_f(s['total_s_max'], 0)} "
           f"sum {_f(s['total_s_sum'], 0)}"
+          + (f"; Sun below the horizon: {s['night_flagged']}/{s['night_frames']} frames flagged "
+             f"without direct sunlight (target >= 98%), highest answered Sun "
+             f"{_f(s['night_max_altitude_deg'], 0)} deg up (target <= 8)"
+             if s["night_frames"] else "")
           + (f"; runs failed: {', '.join(s['failed_runs'])}" if s["failed_runs"] else ""))
 
 
@@ -254,6 +287,10 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenes", type=int, default=32,
                    help="how many scenes: the fixed members, then seeds 1, 2, ... (default 32)")
+    p.add_argument("--twilight", type=int, default=TWILIGHT_SCENES,
+                   help="twilight members added to them: twilight1, 2, ... (default "
+                        f"{TWILIGHT_SCENES}): clips that run past sunset or start before "
+                        "sunrise")
     p.add_argument("--seeds", type=parse_seeds,
                    help="exactly these scenes instead: e.g. 1,4,10-12,plaza14")
     p.add_argument("--jobs", type=int, default=1, help="scenes rendered/estimated at once")
@@ -272,13 +309,15 @@ def main(argv=None):
     args = p.parse_args(argv)
     if args.scenes < 1:
         p.error(f"--scenes must be at least 1, got {args.scenes}")
+    if args.twilight < 0:
+        p.error(f"--twilight must be 0 or more, got {args.twilight}")
     if args.jobs < 1:
         p.error(f"--jobs must be at least 1, got {args.jobs}")
     smoothings = [s for s in args.smoothings.split(",") if s]
     bad = [s for s in smoothings if s not in SMOOTHINGS]
     if bad or not smoothings:
         p.error(f"--smoothings takes {', '.join(SMOOTHINGS)}, got '{args.smoothings}'")
-    keys = scene_keys(args.scenes, args.seeds)
+    keys = scene_keys(args.scenes, args.seeds, args.twilight)
     cache, work = os.path.abspath(args.cache), os.path.abspath(args.work)
     log_dir = os.path.join(work, "logs")
     os.makedirs(cache, exist_ok=True)

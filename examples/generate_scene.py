@@ -58,6 +58,8 @@ from sunlapse.core import trackfile  # noqa: E402
 SUN_ANGULAR_DIAMETER_DEG = 0.545
 # Sun lamp irradiance (W/m^2 in Blender's units).
 SUN_STRENGTH = 4.0
+# The sky's Background strength (skylight only: the lamp is the Sun).
+SKY_STRENGTH = 0.12
 
 # Each preset differs in place (both hemispheres), season, time of day (high
 # and low Sun), north offset, camera height and angle, ground texture and the
@@ -339,12 +341,15 @@ def sun_at(native, when, preset):
                                u.second + u.microsecond * 1e-6, preset["lat"], preset["lon"])
 
 
-def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=True):
+def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=True,
+                    sky_factors=None):
     """A Sun lamp of the real angular size and a Nishita sky that follows it,
     keyframed on every frame. `strength_factors` dims the lamp per frame
-    (clouds). Without `sky_importance` Cycles builds no importance map of the
-    world: the sky (no Sun disc) is smooth, and rebuilding the map on every
-    frame costs ~8x the render of a small frame (measured 10.2 vs 1.3 s)."""
+    (clouds, the horizon), `sky_factors` the sky (twilight: the sky keeps
+    the colour of a Sun just below the horizon, dimmer). Without
+    `sky_importance` Cycles builds no importance map of the world: the sky
+    (no Sun disc) is smooth, and rebuilding the map on every frame costs ~8x
+    the render of a small frame (measured 10.2 vs 1.3 s)."""
     lamp_data = bpy.data.lights.new("Sun", "SUN")
     lamp_data.angle = math.radians(SUN_ANGULAR_DIAMETER_DEG)
     lamp_data.energy = SUN_STRENGTH
@@ -361,7 +366,7 @@ def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=Tr
     sky.sky_type = "NISHITA"
     sky.sun_disc = False  # the lamp is the Sun; the sky only adds skylight
     bg = world.node_tree.nodes["Background"]
-    bg.inputs["Strength"].default_value = 0.12
+    bg.inputs["Strength"].default_value = SKY_STRENGTH
     world.node_tree.links.new(sky.outputs["Color"], bg.inputs["Color"])
 
     for i, (z, a) in enumerate(suns):
@@ -371,9 +376,12 @@ def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=Tr
         if strength_factors is not None:
             lamp_data.energy = SUN_STRENGTH * strength_factors[i]
             lamp_data.keyframe_insert("energy", frame=f)
-        sky.sun_elevation, sky.sun_rotation = sky_angles(z, a + north)
+        sky.sun_elevation, sky.sun_rotation = sky_angles(min(z, 89.5), a + north)
         sky.keyframe_insert("sun_elevation", frame=f)
         sky.keyframe_insert("sun_rotation", frame=f)
+        if sky_factors is not None:
+            bg.inputs["Strength"].default_value = SKY_STRENGTH * sky_factors[i]
+            bg.inputs["Strength"].keyframe_insert("default_value", frame=f)
     curves = list(lamp.animation_data.action.fcurves) + \
         list(world.node_tree.animation_data.action.fcurves)
     if lamp_data.animation_data:
@@ -654,7 +662,8 @@ def main_random(args, native):
     times = random_scene.frame_times_local(spec)
     suns = random_scene.suns_of(spec, native.sun_position)
     north = spec["north_offset_deg"]
-    strength = [random_scene.sun_strength_factor(spec, i) for i in range(frames)]
+    strength = [random_scene.sun_strength_factor(spec, i, suns[i][0]) for i in range(frames)]
+    twilight = [random_scene.twilight_light(spec, z) for z, _ in suns]
 
     scene, model, extras = new_scene()
     g = spec["ground"]
@@ -700,7 +709,8 @@ def main_random(args, native):
     scene.render.resolution_x, scene.render.resolution_y = width, height
     scene.render.resolution_percentage = 100
 
-    lamp = add_sun_and_sky(scene, suns, north, strength_factors=strength, sky_importance=False)
+    lamp = add_sun_and_sky(scene, suns, north, strength_factors=strength, sky_importance=False,
+                           sky_factors=[t[0] for t in twilight] if "twilight" in spec else None)
     exposure = spec.get("exposure_ev", 0.0)
     configure_render(scene, spec["render"]["samples"], exposure, frames, frames_dir)
     scene.cycles.seed = spec["render"].get("seed", 0)
@@ -711,10 +721,11 @@ def main_random(args, native):
             cam_obj.rotation_euler = [rest[k] + math.radians(off[k]) for k in range(3)]
             cam_obj.keyframe_insert("rotation_euler", frame=i + 1)
         cam_obj.rotation_euler = rest
-    if deg["exposure_drift"]:
+    if deg["exposure_drift"] or "twilight" in spec:
         scene["rest_exposure"] = exposure
         for i in range(frames):
-            scene.view_settings.exposure = exposure + random_scene.exposure_offset(spec, i)
+            scene.view_settings.exposure = (exposure + random_scene.exposure_offset(spec, i)
+                                            + twilight[i][1])
             scene.view_settings.keyframe_insert("exposure", frame=i + 1)
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "render.blend"))
     bpy.ops.render.render(animation=True)
@@ -769,6 +780,7 @@ def render_masks(scene, ground, suns, north, mask_frames, masks_dir, strength_fa
     vl.material_override = white
     vl.use_pass_object_index = True
     ground.pass_index = 1
+    scene.world.node_tree.animation_data_clear()  # a twilight sky's keyed strength
     world_strength = scene.world.node_tree.nodes["Background"].inputs["Strength"]
     world_strength.default_value = 0.0
     scene.cycles.max_bounces = 0

@@ -31,6 +31,15 @@ MAX_ZENITH_DEG = 78.0
 # pass criterion judges azimuth alone).
 MIN_ZENITH_DEG = 8.0
 ROOM_EVERY = 5  # seeds with seed % ROOM_EVERY == ROOM_EVERY - 1 are rooms
+# Keys "twilight<seed>": outdoor scenes whose clip runs past sunset (or
+# starts before sunrise) into twilight, as real clips do: the Sun ends (or
+# starts) TWILIGHT_DEPTH_DEG below the horizon, the direct light fades out
+# over the last HORIZON_FADE_DEG above it, and the camera's exposure rises
+# as the light falls.
+TWILIGHT_PREFIX = "twilight"
+TWILIGHT_DEPTH_DEG = (3.0, 8.0)
+TWILIGHT_DAY_HOURS = (1.5, 4.0)
+HORIZON_FADE_DEG = 4.0
 
 GROUNDS = ["paving", "asphalt", "grass", "wood", "cobbles"]
 CASTER_SHAPES = ["pole", "box", "wall", "kiosk", "lshape", "cylinder"]
@@ -131,6 +140,65 @@ def suns_of(spec, sun_position):
             for t in frame_times_local(spec)]
 
 
+def _crossing(sun_position, lat, lon, t0, t1, zenith_deg):
+    """The time between t0 and t1 (either order) when the Sun's zenith
+    crosses zenith_deg (it must cross once), to the second."""
+    def above(t):
+        return _sun(sun_position, t, lat, lon)[0] < zenith_deg
+    first = above(t0)
+    while abs((t1 - t0).total_seconds()) > 1.0:
+        mid = t0 + (t1 - t0) / 2
+        if above(mid) == first:
+            t0 = mid
+        else:
+            t1 = mid
+    return t0
+
+
+def _draw_twilight_time(rng, sun_position, frames):
+    """A place, a date and a window that starts TWILIGHT_DAY_HOURS before
+    sunset and ends with the Sun TWILIGHT_DEPTH_DEG below the horizon (or
+    mirrored about sunrise), its Sun within the suite's bounds while up."""
+    for _ in range(400):
+        lat = rng.uniform(-55.0, 60.0)
+        lon = rng.uniform(-180.0, 180.0)
+        utc = max(-12, min(14, round(lon / 15.0)))
+        day = dt.date(2025, 1, 1) + dt.timedelta(days=rng.randrange(365))
+        tz = dt.timezone(dt.timedelta(hours=utc))
+        noon = dt.datetime(day.year, day.month, day.day, 12, tzinfo=tz) - \
+            dt.timedelta(hours=lon / 15.0 - utc)   # about the Sun's transit
+        dusk = rng.random() < 0.5
+        depth = rng.uniform(*TWILIGHT_DEPTH_DEG)
+        hours = rng.uniform(*TWILIGHT_DAY_HOURS)
+        if _sun(sun_position, noon, lat, lon)[0] >= MAX_ZENITH_DEG - 10.0:
+            continue
+        far = noon + dt.timedelta(hours=12 if dusk else -12)
+        if _sun(sun_position, far, lat, lon)[0] < 90.0 + depth:
+            continue  # no night that deep (high latitudes in summer)
+        horizon = _crossing(sun_position, lat, lon, noon, far, 90.0)
+        night = _crossing(sun_position, lat, lon, horizon, far, 90.0 + depth)
+        day_end = horizon + dt.timedelta(hours=-hours if dusk else hours)
+        if (day_end < noon) if dusk else (day_end > noon):
+            continue  # the window would pass the Sun's transit
+        start, end = (day_end, night) if dusk else (night, day_end)
+        step = (end - start) / (frames - 1)
+        times = [start + i * step for i in range(frames)]
+        suns = [_sun(sun_position, t, lat, lon) for t in times]
+        if min(z for z, _ in suns) < MIN_ZENITH_DEG:
+            continue
+        if sum(z < MAX_ZENITH_DEG for z, _ in suns) < frames // 2:
+            continue  # mostly twilight: too few frames with shadows in view
+        start = start.replace(microsecond=0)
+        result = dict(place={"latitude_deg": round(lat, 4), "longitude_deg": round(lon, 4)},
+                      time={"start_local": start.replace(tzinfo=None).isoformat(),
+                            "utc_offset_h": utc,
+                            "minutes_per_frame": round(step.total_seconds() / 60.0, 3)},
+                      twilight={"side": "dusk" if dusk else "dawn",
+                                "depth_deg": round(depth, 2)})
+        return result, suns
+    raise RuntimeError("could not draw a twilight window")
+
+
 def _draw_time(rng, sun_position, frames, hours_range, ok):
     """A place, a date and a window of `hours_range` hours whose Sun stays
     below MAX_ZENITH_DEG and satisfies ok(suns_world_fn)."""
@@ -224,8 +292,12 @@ def shadow_points(item, sun_world):
     return out
 
 
-def check_frames(n):
-    return sorted({0, n // 2, n - 1})
+def check_frames(n, suns=None):
+    """The frames whose shadows must be in view: the first, middle and last
+    of those with the Sun below MAX_ZENITH_DEG (all of them without suns)."""
+    up = list(range(n)) if suns is None else [i for i in range(n)
+                                              if suns[i][0] < MAX_ZENITH_DEG]
+    return sorted({up[0], up[len(up) // 2], up[-1]})
 
 
 def casters_in_view(spec, sun_position):
@@ -237,7 +309,7 @@ def casters_in_view(spec, sun_position):
     out = []
     for item in spec["casters"]:
         ok = True
-        for i in check_frames(len(suns)):
+        for i in check_frames(len(suns), suns):
             s = sun_in_world(suns[i][0], suns[i][1] + north)
             ok = ok and all(cam.in_view(p, 0.03) for p in shadow_points(item, s))
         out.append(ok)
@@ -262,8 +334,9 @@ def _place(rng, cam, item, placed, suns_world, tries=300):
     return False
 
 
-def _draw_outdoor(rng, sun_position, frames, resolution):
-    t, suns = _draw_time(rng, sun_position, frames, (1.0, 8.0), lambda s: True)
+def _draw_outdoor(rng, sun_position, frames, resolution, twilight=False):
+    t, suns = _draw_twilight_time(rng, sun_position, frames) if twilight else \
+        _draw_time(rng, sun_position, frames, (1.0, 8.0), lambda s: True)
     north = round(rng.uniform(-180.0, 180.0), 2)
     width, height = resolution
     for _ in range(500):
@@ -294,7 +367,8 @@ def _draw_outdoor(rng, sun_position, frames, resolution):
                 render={"frames": frames, "resolution": list(resolution), "samples": 8})
     cam = camera_of(spec)
     thin = 2.5 * view_width_m / width
-    suns_world = [sun_in_world(z, a + north) for z, a in (suns[i] for i in check_frames(frames))]
+    suns_world = [sun_in_world(z, a + north)
+                  for z, a in (suns[i] for i in check_frames(frames, suns))]
     casters = []
     want = rng.randint(2, 5)
     shapes = [rng.choice(CASTER_SHAPES) for _ in range(want)]
@@ -465,9 +539,32 @@ def _draw_degradations(rng, frames):
             "exposure_drift": drift, "shake_deg": shake}
 
 
-def sun_strength_factor(spec, frame_index):
-    """Clouds: the Sun's strength dips smoothly (1 = clear)."""
-    f = 1.0
+def _smoothstep(lo, hi, x):
+    u = min(1.0, max(0.0, (x - lo) / (hi - lo)))
+    return u * u * (3.0 - 2.0 * u)
+
+
+def horizon_factor(zenith_deg):
+    """Direct sunlight through the air near the horizon: none below it,
+    fading in over HORIZON_FADE_DEG of altitude."""
+    return _smoothstep(0.0, HORIZON_FADE_DEG, 90.0 - zenith_deg)
+
+
+def twilight_light(spec, zenith_deg):
+    """(sky strength factor, camera exposure offset in EV) at a Sun's
+    zenith: the sky dims by half an EV a degree below the horizon and an
+    auto-exposing camera makes up three quarters of it; 1 and 0 in scenes
+    without twilight and while the Sun is up."""
+    if "twilight" not in spec:
+        return 1.0, 0.0
+    below_ev = 0.5 * max(0.0, zenith_deg - 90.0)
+    return 2.0 ** -below_ev, 0.75 * below_ev
+
+
+def sun_strength_factor(spec, frame_index, zenith_deg=None):
+    """Clouds: the Sun's strength dips smoothly (1 = clear); and fades at
+    the horizon (horizon_factor) when the Sun's zenith is given."""
+    f = 1.0 if zenith_deg is None else horizon_factor(zenith_deg)
     for c in spec["degradations"]["clouds"]:
         x = (frame_index + 1 - c["frame"]) / max(c["width_frames"] / 2.0, 0.5)
         f *= 1.0 - c["depth"] * math.exp(-x * x)
@@ -538,21 +635,25 @@ FIXED = {
 def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION):
     """The scene spec for `key`: an integer seed or a name in FIXED."""
     key = str(key)
+    twilight = key.startswith(TWILIGHT_PREFIX)
     if key in FIXED:
         spec = _plaza14(key, sun_position=sun_position, frames=frames,
                         resolution=resolution, **FIXED[key])
     else:
         try:
-            seed = int(key)
+            seed = int(key[len(TWILIGHT_PREFIX):] if twilight else key)
         except ValueError:
-            raise ValueError(f"scene key must be an integer seed or one of "
-                             f"{', '.join(sorted(FIXED))}, got '{key}'") from None
-        rng = random.Random(seed)
-        room = seed % ROOM_EVERY == ROOM_EVERY - 1
+            raise ValueError(f"scene key must be an integer seed, {TWILIGHT_PREFIX}<seed> or "
+                             f"one of {', '.join(sorted(FIXED))}, got '{key}'") from None
+        # Twilight members draw from their own stream (not seed N's scene).
+        rng = random.Random(f"{TWILIGHT_PREFIX}-{seed}" if twilight else seed)
+        room = not twilight and seed % ROOM_EVERY == ROOM_EVERY - 1
         spec = None
         for _ in range(20):  # an unlucky draw (no caster fits) draws again
-            spec = (_draw_room if room else _draw_outdoor)(rng, sun_position, frames,
-                                                           tuple(resolution))
+            if room:
+                spec = _draw_room(rng, sun_position, frames, tuple(resolution))
+            else:
+                spec = _draw_outdoor(rng, sun_position, frames, tuple(resolution), twilight)
             if spec is not None:
                 break
         if spec is None:
@@ -573,6 +674,8 @@ def describe(spec):
     deg = spec["degradations"]
     flags = [f for f, on in (("clouds", deg["clouds"]), ("drift", deg["exposure_drift"]),
                              ("shake", deg["shake_deg"])) if on]
+    if "twilight" in spec:
+        flags.insert(0, spec["twilight"]["side"])
     return (f"{spec['kind']} lat {p['latitude_deg']:.1f} lon {p['longitude_deg']:.1f} "
             f"{t['start_local'][:16]} {hours:.1f}h N{spec['north_offset_deg']:+.0f} "
             f"cam {cam['location'][2]:.1f}m {cam['lens_mm']:.0f}mm {spec['ground']['kind']} "
