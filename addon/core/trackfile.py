@@ -25,6 +25,17 @@ class TrackFileError(ValueError):
     """A track file that cannot be read: says which file and what is wrong."""
 
 
+class Sunlight(str, Enum):
+    """Whether direct sunlight reaches the scene on a frame, as its footage
+    shows: YES (shadows the Sun casts), NO (none where the Sun's shadows
+    would show, or the Sun below the horizon: night, twilight, cloud, the
+    scene in shade), UNKNOWN (the frame cannot tell: not readable, or no
+    frame of its segment shows shadows)."""
+    YES = "yes"
+    NO = "no"
+    UNKNOWN = "unknown"
+
+
 @dataclass
 class FrameEstimate:
     frame: int
@@ -40,6 +51,12 @@ class FrameEstimate:
     sun_ambient_ratio: Optional[float] = None
     # Capture time (ISO 8601, UTC) when the run was given the frames' times.
     time_utc: Optional[str] = None
+    # Direct sunlight on the frame (None: not decided, e.g. the thesis
+    # method, older files).
+    sunlight: Optional[Sunlight] = None
+    # The Sun is predicted from its segment's path, not measured on the
+    # frame (its confidence is 0).
+    predicted: bool = False
 
     @property
     def has_estimate(self) -> bool:
@@ -127,18 +144,25 @@ class Track:
     def extrapolated(self) -> List[int]:
         """Frames whose Sun only extrapolates the smoothing beyond the
         measured frames (a clip that ended early, frames lost at its start or
-        end): no measurement backs them, so they are not keyed."""
+        end): no measurement backs them, so they are not keyed. Predicted
+        frames are not among them: their Sun is the segment's path, said so."""
         span = self.measured_span()
         if span is None:  # no raw angles at all (a truth file): nothing tells
             return []
         return [f.frame for f in self.frames
-                if f.has_estimate and not span[0] <= f.frame <= span[1]]
+                if f.has_estimate and not f.predicted and not span[0] <= f.frame <= span[1]]
 
     def keyable(self) -> List[FrameEstimate]:
         """Estimated frames within the measured span (interpolated gaps
-        included): the frames a lamp is keyed on."""
+        included) and frames whose Sun is predicted from their segment's
+        path (night, twilight: the lamp keyed off there): the frames a lamp
+        is keyed on."""
         skip = set(self.extrapolated())
         return [f for f in self.estimated() if f.frame not in skip]
+
+    def without_sunlight(self) -> List[int]:
+        """Frames the estimate found without direct sunlight (Sunlight.NO)."""
+        return [f.frame for f in self.frames if f.sunlight == Sunlight.NO]
 
     def north_source(self) -> NorthSource:
         if self.extra.get("sun_path_fit"):
@@ -152,6 +176,17 @@ class Track:
     def north_known(self) -> bool:
         """Whether azimuth_deg is geographic (clockwise from true north)."""
         return self.north_source() != NorthSource.UNKNOWN
+
+
+def frame_ranges(frames: List[int]) -> str:
+    """Frame numbers as runs, for messages: "1-5, 9, 57-61"."""
+    runs: List[List[int]] = []
+    for f in sorted(set(frames)):
+        if runs and f == runs[-1][1] + 1:
+            runs[-1][1] = f
+        else:
+            runs.append([f, f])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
 
 
 def _num(value: Any) -> Optional[float]:
@@ -174,6 +209,10 @@ def _frame_to_json(f: FrameEstimate) -> Dict[str, Any]:
         d["time_utc"] = str(f.time_utc)
     if f.sun_ambient_ratio is not None:
         d["sun_ambient_ratio"] = float(f.sun_ambient_ratio)
+    if f.sunlight is not None:
+        d["sunlight"] = Sunlight(f.sunlight).value
+    if f.predicted:
+        d["predicted"] = True
     if f.shadow_start_px is not None and f.shadow_end_px is not None:
         d["shadow"] = {"start_px": [float(v) for v in f.shadow_start_px],
                        "end_px": [float(v) for v in f.shadow_end_px]}
@@ -335,6 +374,24 @@ def _pixel(value: Any, what: str) -> List[float]:
     return [_number(v, what, allow_null=False) for v in value]
 
 
+def _sunlight(value: Any) -> Optional[Sunlight]:
+    if value is None:
+        return None
+    try:
+        return Sunlight(value)
+    except ValueError:
+        raise ValueError(f"sunlight is {value!r}, not one of "
+                         f"{', '.join(repr(s.value) for s in Sunlight)}") from None
+
+
+def _flag(value: Any, what: str) -> bool:
+    if value is None:
+        return False
+    if not isinstance(value, bool):
+        raise ValueError(f"{what} is {value!r}, not true or false")
+    return value
+
+
 def _frame_from_json(fd: Any) -> FrameEstimate:
     if not isinstance(fd, dict):
         raise ValueError("not an object")
@@ -357,7 +414,9 @@ def _frame_from_json(fd: Any) -> FrameEstimate:
         shadow_start_px=start, shadow_end_px=end,
         reason=_text(fd.get("reason"), "reason"),
         sun_ambient_ratio=_number(fd.get("sun_ambient_ratio"), "sun_ambient_ratio", 0.0),
-        time_utc=_text(fd.get("time_utc"), "time_utc"))
+        time_utc=_text(fd.get("time_utc"), "time_utc"),
+        sunlight=_sunlight(fd.get("sunlight")),
+        predicted=_flag(fd.get("predicted"), "predicted"))
     # One angle without the other is no estimate.
     if (f.zenith_deg is None) != (f.azimuth_deg is None):
         f.zenith_deg = f.azimuth_deg = None

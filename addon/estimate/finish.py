@@ -14,6 +14,7 @@ from .errors import check_progress
 from .options import SMOOTHING_SPACE, TWO_PASS_DEGREE, EstimateOptions
 from .raw import RawSun
 from ..core import angles, clock, smoothing, suncircle, sunpath, trackfile
+from ..core.trackfile import Sunlight
 
 
 def _sun_circle(track, numbers, raws, options, north):
@@ -111,11 +112,20 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle)
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
+        predicted = _predicted(r) and z_s is not None and a_s is not None
+        reason = r.reason
+        if predicted:
+            reason = (f"{r.reason or 'no direct sunlight'}; its Sun is predicted from its "
+                      f"segment's path")
+        elif _predicted(r):
+            reason = f"{r.reason or 'no direct sunlight'}, and nothing bounds where the Sun is"
         est = trackfile.FrameEstimate(frame=r.frame, zenith_deg=_settled(z_s),
                                       azimuth_deg=_settled(a_s),
                                       raw_zenith_deg=r.zenith_deg, raw_azimuth_deg=r.azimuth_deg,
-                                      confidence=r.confidence, reason=r.reason,
-                                      time_utc=None if times is None else times[k].isoformat())
+                                      confidence=0.0 if predicted else r.confidence,
+                                      reason=reason,
+                                      time_utc=None if times is None else times[k].isoformat(),
+                                      sunlight=r.sunlight, predicted=predicted)
         tracked = r.tracked
         if tracked is not None and tracked.shadow_end_px[0] == tracked.shadow_end_px[0]:  # NaN?
             est.shadow_start_px = [(v + 0.5) * pixel_scale - 0.5 for v in tracked.shadow_start_px]
@@ -144,6 +154,11 @@ def _settled(angle_deg):
 # span's end Sun moved as the segment's Sun circle moves, else their own raw
 # Sun no further from the end's than the Sun can move.
 SPAN_MIN_CONFIDENCE = 0.1
+# Without capture times a frame without direct sunlight past the span gets
+# its segment's circle only this share of the span's length (in frames)
+# beyond it: the circle's rate is then per frame, which a pause in the
+# captures (the night between two days) breaks.
+PREDICT_PAST_SPAN_SHARE = 0.5
 
 
 def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None):
@@ -156,6 +171,7 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None)
     zs, azs = [None] * len(numbers), [None] * len(numbers)
     for seg in segments:
         ks = sorted(index[f] for f in seg)
+        whole = ks
         have = [k for k in ks if raws[k].has_sun]
         if not have:
             continue
@@ -179,16 +195,32 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None)
                 times_s=None if seconds is None else [seconds[k] for k in ks])
         for k, z, a in zip(ks, z_s, a_s):
             zs[k], azs[k] = z, a
-        for k in have:
+        length = numbers[span[-1]] - numbers[span[0]]
+        for k in whole:
             if span[0] <= k <= span[-1] or zs[span[0]] is None or zs[span[-1]] is None:
                 continue
             end = span[0] if k < span[0] else span[-1]
+            circle_end = None if circle is None else circle.get(end)
+            circle_here = None if circle is None else circle.get(k)
+            if not raws[k].has_sun:
+                # Predicted (no direct sunlight): the segment's circle, and
+                # without capture times only near the span.
+                near = seconds is not None or \
+                    abs(numbers[k] - numbers[end]) <= PREDICT_PAST_SPAN_SHARE * length
+                if _predicted(raws[k]) and circle_end and circle_here and near:
+                    zs[k], azs[k] = _past_span(zs[end], azs[end], None, None, 0.0,
+                                               circle_end, circle_here)
+                continue
             moved = motion.sun_motion_bound_deg(k, end, seconds)
             zs[k], azs[k] = _past_span(zs[end], azs[end], raws[k].zenith_deg,
-                                       raws[k].azimuth_deg, moved,
-                                       None if circle is None else circle.get(end),
-                                       None if circle is None else circle.get(k))
+                                       raws[k].azimuth_deg, moved, circle_end, circle_here)
     return zs, azs
+
+
+def _predicted(r: RawSun) -> bool:
+    """Whether a frame's Sun is to be predicted from its segment's path:
+    the method decided it has no direct sunlight, or cannot tell."""
+    return r.sunlight is not None and r.sunlight != Sunlight.YES
 
 
 def _columns(raws: Sequence[RawSun]

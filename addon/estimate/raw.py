@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Optional
 
+from ..core.trackfile import Sunlight
+
 
 @dataclass
 class RawSun:
@@ -12,13 +14,15 @@ class RawSun:
     (degrees, clockwise from north as the track's north_offset_deg says), or
     None for both with the reason. tracked: the native TrackedFrame behind
     it (its shadow's ends and sun/ambient contrast), when the tracker
-    refined it."""
+    refined it. sunlight: direct sunlight on the frame, where the method
+    decides it (a frame without it has no raw Sun: finish.py predicts one)."""
     frame: int
     zenith_deg: Optional[float] = None
     azimuth_deg: Optional[float] = None
     confidence: float = 0.0
     reason: Optional[str] = None
     tracked: Any = None
+    sunlight: Optional[Sunlight] = None
 
     @property
     def has_sun(self) -> bool:

@@ -21,7 +21,11 @@ Frames in, raw per-frame Suns out:
 
 5. each segment's Sun circle fitted to its refined Suns, kept with the
    result (the smoothing's prior) and lowering the confidence of frames far
-   off it.
+   off it;
+6. direct sunlight decided per frame (Sunlight): frames without it keep no
+   Sun of their own (no shadows to measure one by: a dark frame's best
+   direction is whatever its ambient shading resembles) and confidence 0;
+   finish.py predicts theirs from their segment's path.
 
 The controller (_WholeClip) takes these as named steps over one state;
 run() drives it over a clip and hands the raw Suns to finish.py: smoothing
@@ -43,6 +47,7 @@ from .errors import Cancelled, EstimateError
 from .options import gamma
 from .raw import RawSun
 from ..core import angles, clock, trackfile, trimmed_circle
+from ..core.trackfile import Sunlight
 
 # Frames spread over the clip whose high quantile per surface sample is its
 # reference level (its albedo times its usual lit level).
@@ -112,6 +117,23 @@ PRIOR_STRAY_DEG = 4.0
 CIRCLE_DOUBT_DEG = 3.0
 CIRCLE_INLIER_FLOOR_DEG = 1.5
 
+# Direct sunlight (Sunlight, per frame). The sky's evidence alone cannot
+# say it: under the sky's light alone the model's surfaces are darker where
+# they see less sky (ambient occlusion), which a Sun near the zenith
+# explains well (a dark frame's best direction came out overhead on a real
+# sundial webcam, and on test_whole_clip's dusk frames its lead over no
+# shadows at all was 50x the evidence threshold). The tracker's fit says
+# it: the Sun's shadows, sharp where the Sun puts them, with the
+# sun/ambient contrast across their edges at least SUNLIT_MIN_CONTRAST (on
+# the suite 1017 of 1024 frames refine at >= 1; at dusk it fits 0.6-1.0 on
+# frames whose Sun has just set). Where the tracker never ran (no ground)
+# the sky's evidence is all there is. A Sun below the horizon, the frame's
+# own or its segment's circle's, lights no ground, whatever the frame shows
+# (a grazing Sun's fitted contrast means nothing: the tracker fitted 5-9 on
+# suite frames whose Sun had set by 0.3 deg). A readable frame without
+# sunlight, in a segment whose other frames show it, says NO; else UNKNOWN.
+SUNLIT_MIN_CONTRAST = 1.0
+
 
 @dataclass
 class RawFrame:
@@ -131,6 +153,9 @@ class RawFrame:
     tracked: object = None        # native TrackedFrame when refined
     # The Sun on its segment's circle about the pole, where one was fitted.
     circle_in_world: Optional[np.ndarray] = None
+    # Direct sunlight on the frame; without it the frame keeps no Sun of
+    # its own (finish.py predicts one from the segment's path).
+    sunlight: Sunlight = Sunlight.UNKNOWN
 
 
 @dataclass
@@ -258,6 +283,33 @@ def _evidence_support(first: _Path, again: _Path,
     return out
 
 
+def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
+                           starts: Sequence[int]) -> List[int]:
+    """Segment bounds (frame positions, first 0, last n) without the jumps
+    that start or end a segment no frame of which has evidence of its own:
+    frames without shadows (night, cloud) show no jump of the Sun, they
+    belong to the segment around them. The caller's starts (times going
+    back) stay."""
+    bounds = list(bounds)
+    k = 1
+    while k < len(bounds) - 1:
+        b = bounds[k]
+        dark_before = not any(measured[bounds[k - 1]:b])
+        dark_after = not any(measured[b:bounds[k + 1]])
+        if not starts[b] and (dark_before or dark_after):
+            del bounds[k]
+            k = max(1, k - 1)
+        else:
+            k += 1
+    return bounds
+
+
+def _contrast(tracked: Any) -> float:
+    """The sun/ambient contrast the tracker fitted on a frame (a native
+    TrackedFrame), 0 without one."""
+    return 0.0 if tracked is None else float(tracked.contrast)
+
+
 def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
     return read if isinstance(read, np.ndarray) else None
 
@@ -311,6 +363,9 @@ class _WholeClip:
         self.ground_ids, self.times_s = list(ground_object_ids), times_s
         self.progress, self.fit_circle = progress, fit_circle
         self.result = WholeClipResult()
+        # Frames whose evidence the path does not use (found without direct
+        # sunlight; run()).
+        self.ignored: List[int] = []
         self.t0 = time.perf_counter()
         self.clock: Dict[str, float] = {}   # step -> seconds since t0 at its end
         self.frames_read = 0
@@ -346,15 +401,35 @@ class _WholeClip:
         if kept is None:
             return self.result
         self.clip_pass(kept)
-        if not self.solve_path():
+        if not self.path_and_check():
             return self.result
-        self.choose_again_under_circle_prior()
+        # Frames whose evidence steered the path but that show no direct
+        # sunlight: the path chosen again without their evidence (with
+        # capture times it may not jump, and their ambient shading's high
+        # Sun bent it over the lit frames before them).
+        ignored = [int(bool(self.path.measured[k]) and r.sunlight != Sunlight.YES)
+                   for k, r in enumerate(self.result.frames)]
+        if any(ignored):
+            self.ignored = ignored
+            if not self.path_and_check():
+                return self.result
+            self.mark("dark_again")
         self.release_sky()
-        self.segments_and_evidence()
-        self.check_segments()
         self.doubt_off_circle()
+        self.below_horizon()
         self.result.timing = self.timing()
         return self.result
+
+    def path_and_check(self) -> bool:
+        """The path chosen, its segments checked and each frame's sunlight
+        decided; False when no path could be chosen."""
+        if not self.solve_path():
+            return False
+        self.choose_again_under_circle_prior()
+        self.segments_and_evidence()
+        self.check_segments()
+        self.decide_sunlight()
+        return True
 
     # -- steps ---------------------------------------------------------
 
@@ -429,7 +504,7 @@ class _WholeClip:
     def solve_path(self) -> bool:
         """The Sun's path chosen globally over the sky's evidence."""
         solved = self.native.solve_sun_path(self.sky, self.times_list(), self.starts,
-                                            self.path_options)
+                                            self.path_options, None, self.ignored)
         if solved.status != self.native.SunPathStatus.SUCCESS:
             self.result.frames = [
                 RawFrame(f, reason=solved.message or self.done.reason(k) or "no evidence")
@@ -449,7 +524,7 @@ class _WholeClip:
         self.mark("prior")
         if prior is not None:
             again = self.native.solve_sun_path(self.sky, self.times_list(), self.starts,
-                                               self.path_options, prior)
+                                               self.path_options, prior, self.ignored)
             if again.status == self.native.SunPathStatus.SUCCESS:
                 path = _path_from(again)
                 path.path_margin = _evidence_support(self.path, path, self.directions,
@@ -468,13 +543,10 @@ class _WholeClip:
         """The path's segments, its unexplained jumps, the per-frame
         evidence figures and the best-supported frame."""
         path, frames, n = self.path, self.frames, self.n
-        self.bounds = [0]
-        for k in range(1, n):
-            if path.jump_before[k]:
-                self.bounds.append(k)
-                if not self.starts[k]:
-                    self.result.jumps.append(frames[k])
-        self.bounds.append(n)
+        self.bounds = _without_dark_segments(
+            [0] + [k for k in range(1, n) if path.jump_before[k]] + [n],
+            path.measured, self.starts)
+        self.result.jumps = [frames[k] for k in self.bounds[1:-1] if not self.starts[k]]
         d = self.directions
         self.result.evidence = {
             "explained": [round(v, 3) for v in path.explained],
@@ -493,6 +565,7 @@ class _WholeClip:
         where it never started, one started on the segment's first measured
         frame)."""
         measured, frames = self.path.measured, self.frames
+        self.result.frames, self.result.segments = [], []
         self.before, self.after = [0] * self.n, [0] * self.n  # nearest measured frames
         self.tracker_run: Optional[Tuple[int, int]] = None  # (segment, direction) followed
         self.tracker_last: Optional[int] = None             # the tracker's last frame
@@ -538,6 +611,67 @@ class _WholeClip:
             seg = sorted(self.result.frames[lo:hi], key=lambda r: r.frame)
             t = [float(r.frame) if seconds is None else seconds[at[r.frame]] for r in seg]
             doubt_off_circle(seg, t, seconds is not None, self.fit_circle)
+
+    def decide_sunlight(self) -> None:
+        """Direct sunlight per frame (SUNLIT_MIN_CONTRAST above): frames
+        without it keep no Sun of their own and confidence 0, and a segment
+        of such frames joins the one before it (or after)."""
+        frames = self.result.frames
+        tracker_ran = any(r.refined for r in frames)
+        for k, r in enumerate(frames):
+            if r.sun_in_world is None:
+                sunlit = False
+            elif tracker_ran:
+                sunlit = r.refined and _contrast(r.tracked) >= SUNLIT_MIN_CONTRAST
+            else:  # no ground to track on: the sky's evidence alone
+                sunlit = r.measured
+            r.sunlight = Sunlight.YES if sunlit else \
+                Sunlight.NO if self.usable[k] else Sunlight.UNKNOWN
+        bounds = _without_dark_segments(self.bounds, [r.sunlight == Sunlight.YES for r in frames],
+                                        self.starts)
+        if bounds != self.bounds:
+            self.bounds = bounds
+            self.result.jumps = [self.frames[k] for k in bounds[1:-1] if not self.starts[k]]
+            self.result.segments = [self.frames[lo:hi] for lo, hi in zip(bounds, bounds[1:])]
+            for s, (lo, hi) in enumerate(zip(bounds, bounds[1:])):
+                for r in frames[lo:hi]:
+                    r.segment = s
+        for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
+            if not any(r.sunlight == Sunlight.YES for r in frames[lo:hi]):
+                for r in frames[lo:hi]:  # nothing in the clip shows shadows here
+                    r.sunlight = Sunlight.UNKNOWN
+        for r in frames:
+            if r.sunlight != Sunlight.YES:
+                self.unlit(r, "no direct sunlight on this frame"
+                           if r.sunlight == Sunlight.NO else r.reason)
+        self.anchor_in_sunlight()
+
+    def below_horizon(self) -> None:
+        """A Sun below the horizon (the frame's own, or its segment's
+        circle's) lights no ground: whatever the frame shows, it has no
+        direct sunlight."""
+        for r in self.result.frames:
+            if any(sun is not None and sun[2] <= 0.0 for sun in (r.sun_in_world,
+                                                                 r.circle_in_world)):
+                r.sunlight = Sunlight.NO
+                self.unlit(r, "the Sun is below the horizon here")
+        self.anchor_in_sunlight()
+
+    def anchor_in_sunlight(self) -> None:
+        """The best-supported frame among those with direct sunlight."""
+        frames = self.result.frames
+        if self.result.anchor is None or \
+                frames[self.frames.index(self.result.anchor)].sunlight == Sunlight.YES:
+            return
+        lit = [k for k, r in enumerate(frames) if r.sunlight == Sunlight.YES]
+        best = max(lit, key=lambda k: self.path.margin[k], default=None)
+        self.result.anchor = None if best is None else self.frames[best]
+
+    @staticmethod
+    def unlit(r: RawFrame, reason: Optional[str]) -> None:
+        r.sun_in_world, r.refined, r.tracked = None, False, None
+        r.confidence = r.on_circle = 0.0
+        r.reason = reason
 
     # -- the check's parts -----------------------------------------------
 
@@ -657,7 +791,9 @@ class _WholeClip:
             raise Cancelled("cancelled")
 
     def mark(self, step: str) -> None:
-        self.clock[step] = time.perf_counter() - self.t0
+        """The end of a step (the first time it ends: the steps run again
+        without the dark frames' evidence are timed as dark_again)."""
+        self.clock.setdefault(step, time.perf_counter() - self.t0)
 
     def timing(self) -> dict:
         c, n = self.clock, self.n
@@ -668,6 +804,7 @@ class _WholeClip:
                 "path_s": c["path"] - c["evidence"], "prior_s": c["prior"] - c["path"],
                 "path_again_s": c["path_again"] - c["prior"], "path_prior": self.path_prior,
                 "check_s": c["checked"] - c["path_again"],
+                "dark_again_s": c["dark_again"] - c["checked"] if "dark_again" in c else 0.0,
                 "frames_read": self.frames_read, "frames": n,
                 "total_s": time.perf_counter() - self.t0, **self.sky_sizes,
                 "directions": len(self.directions), "spacing_deg": self.spacing_deg}
@@ -818,9 +955,10 @@ def _geographic(sun_in_world, north: float) -> Tuple[float, float]:
 
 def _raw_sun(r: RawFrame, north: float) -> RawSun:
     if r.sun_in_world is None:
-        return RawSun(r.frame, confidence=r.on_circle, reason=r.reason, tracked=r.tracked)
+        return RawSun(r.frame, confidence=r.on_circle, reason=r.reason, tracked=r.tracked,
+                      sunlight=r.sunlight)
     return RawSun(r.frame, *_geographic(r.sun_in_world, north), confidence=r.on_circle,
-                  reason=r.reason, tracked=r.tracked)
+                  reason=r.reason, tracked=r.tracked, sunlight=r.sunlight)
 
 
 def _note(track, scene, camera, samples, by_frame, options) -> None:

@@ -132,3 +132,44 @@ def test_problems_round_trip_and_old_files_read_their_stage_keys(tmp_path):
     old = tf.from_json(d)
     assert old.problem("smoothing").kind == tf.ProblemKind.FELL_BACK
     assert old.problem("model").kind == tf.ProblemKind.HINT
+
+
+def test_sunlight_and_predicted_round_trip_and_are_keyed(tmp_path):
+    frames = [tf.FrameEstimate(frame=f, zenith_deg=40.0 + f, azimuth_deg=170.0,
+                               raw_zenith_deg=40.0 + f, raw_azimuth_deg=170.0, confidence=0.9,
+                               sunlight=tf.Sunlight.YES) for f in (1, 2, 3)]
+    frames += [tf.FrameEstimate(frame=4, zenith_deg=91.0, azimuth_deg=250.0, confidence=0.0,
+                                sunlight=tf.Sunlight.NO, predicted=True,
+                                reason="the Sun is below the horizon here"),
+               tf.FrameEstimate(frame=5, zenith_deg=93.0, azimuth_deg=252.0, confidence=0.0),
+               tf.FrameEstimate(frame=6, sunlight=tf.Sunlight.UNKNOWN, reason="frame is black")]
+    path = tmp_path / "t.sun.json"
+    tf.write_track(str(path), tf.Track(frames=frames))
+    written = json.loads(path.read_text())["frames"]
+    assert written[3]["sunlight"] == "no" and written[3]["predicted"] is True
+    assert "sunlight" not in written[4] and "predicted" not in written[4]
+    back = tf.read_track(str(path))
+    assert [f.sunlight for f in back.frames] == [tf.Sunlight.YES] * 3 + [
+        tf.Sunlight.NO, None, tf.Sunlight.UNKNOWN]
+    assert [f.predicted for f in back.frames] == [False, False, False, True, False, False]
+    # Predicted frames are keyed (lamp off there); a frame that only
+    # extrapolates past the measured ones is not.
+    assert [f.frame for f in back.keyable()] == [1, 2, 3, 4]
+    assert back.extrapolated() == [5]
+    assert back.without_sunlight() == [4]
+
+
+@pytest.mark.parametrize("entry, message", [
+    ({"frame": 1, "sunlight": "maybe"}, "sunlight is 'maybe'"),
+    ({"frame": 1, "predicted": "yes"}, "predicted is 'yes'")])
+def test_bad_sunlight_fields_are_named(tmp_path, entry, message):
+    path = tmp_path / "t.sun.json"
+    path.write_text(json.dumps({"format": tf.FORMAT_TRACK, "version": 1, "frames": [entry]}))
+    with pytest.raises(tf.TrackFileError, match=message):
+        tf.read_track(str(path))
+
+
+def test_frame_ranges_read_as_runs():
+    assert tf.frame_ranges([57, 1, 2, 3, 9, 58, 5, 4]) == "1-5, 9, 57-58"
+    assert tf.frame_ranges([7]) == "7"
+    assert tf.frame_ranges([]) == ""

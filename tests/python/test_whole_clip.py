@@ -2,6 +2,7 @@
 smoothing (estimate/finish.py) on frames drawn from a small model: a
 pole, a box and a wall on a textured ground brighter far from the camera.
 No Blender: frames are drawn with the native ray caster."""
+import datetime as dt
 import math
 import os
 import sys
@@ -109,11 +110,11 @@ def error_deg(u, truth):
     return math.degrees(math.atan2(np.linalg.norm(np.cross(u, truth)), float(u @ truth)))
 
 
-def run(world, frames_gray, times_s=None):
+def run(world, frames_gray, times_s=None, fit_circle=None):
     scene, camera = world[0], world[1]
     numbers = list(range(1, len(frames_gray) + 1))
     return whole_clip.estimate(native, scene, camera, numbers, lambda f: frames_gray[f - 1], [0],
-                               times_s=times_s)
+                               times_s=times_s, fit_circle=fit_circle)
 
 
 def raw_sun(r):
@@ -345,3 +346,72 @@ def test_a_doubted_run_is_carried_by_the_circle_and_the_confident_frames():
             assert max(errors) < worst, max(errors)
         else:
             assert max(errors) > 2.0, max(errors)
+
+
+def draw_dusk(world, level, seed=0):
+    """A frame without direct sunlight: the sky's light only, dimmer near
+    the objects as ambient occlusion makes it (the darkening a Sun near the
+    zenith would put there: the trap a dark frame sets), at `level` of the
+    lit frames' ambient."""
+    scene, camera, hits, albedo = world
+    seen = hits["object_id"] >= 0
+    pts = np.nan_to_num(hits["point"]).astype(np.float32)
+    normals = np.nan_to_num(hits["normal"]).astype(np.float32)
+    origins = pts + 1e-3 * normals
+    sky = np.zeros(len(pts), np.float32)
+    tilts = [(0.0, 0.0), (25.0, 0.0), (25.0, 120.0), (25.0, 240.0), (50.0, 60.0),
+             (50.0, 180.0), (50.0, 300.0)]
+    for z, a in tilts:  # a few sky directions stand for the sky's dome
+        d = sun(z, a).astype(np.float32)
+        sky += ~scene.occluded(origins, np.repeat(d[None], len(pts), axis=0))
+    light = (level * sky / len(tilts)).reshape(H, W)
+    img = np.where(seen.reshape(H, W), albedo * light, 0.6 * level)
+    noise = np.random.default_rng(seed).normal(0, 0.005, img.shape)
+    return np.clip(img + noise, 0, 1).astype(np.float32)
+
+
+@pytest.mark.parametrize("times", [False, True])
+def test_frames_after_sunset_have_no_sunlight_and_a_predicted_sun(world, times):
+    """Dusk: the last frames have no direct sunlight. They start no segment
+    of their own, keep no Sun of their own (a dark frame's best direction is
+    whatever its ambient shading resembles: overhead, on a real sundial
+    webcam) and get their segment's path, at confidence 0 (issue 25)."""
+    n, lit = 30, 22
+    # The Sun as it moves (40 N, 1 June, every 10 minutes from 07:40 UTC at
+    # longitude 0): the circle carries on as it did.
+    when = [dt.datetime(2025, 6, 1, 7, 40) + dt.timedelta(minutes=10 * k) for k in range(n)]
+    truth = [sun(*native.sun_position(t.year, t.month, t.day, t.hour, t.minute, 0.0, 40.0, 0.0))
+             for t in when]
+    frames = [draw(world, truth[k], k) if k < lit else draw_dusk(world, 0.3, k)
+              for k in range(n)]
+    result = run(world, frames, [600.0 * k for k in range(n)] if times else None,
+                 trimmed_circle.fit_trimmed)
+    assert len(result.segments) == 1 and result.jumps == []
+    Sunlight = whole_clip.Sunlight
+    for k, r in enumerate(result.frames):
+        if k < lit:
+            assert r.sunlight == Sunlight.YES, (k, r)
+            assert error_deg(r.sun_in_world, truth[k]) < 1.0, (k, r)
+        else:
+            assert r.sunlight == Sunlight.NO, (k, r)
+            assert r.sun_in_world is None and r.confidence == 0.0 and r.reason, (k, r)
+    raws = [whole_clip._raw_sun(r, 0.0) for r in result.frames]
+    circle = {k: angles.angles_from_sun_in_world(r.circle_in_world)
+              for k, r in enumerate(result.frames) if r.circle_in_world is not None}
+    zs, azs = finish._smooth_segments([r.frame for r in raws], raws, result.segments,
+                                      "two_pass", estimate_options.EstimateOptions(),
+                                      when if times else None, circle)
+    for k in range(lit, n):  # the Sun's circle carried on
+        assert zs[k] is not None, k
+        assert error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), truth[k]) < 1.0, k
+
+
+def test_dark_segments_join_their_neighbours():
+    measured = [False, False, True, True, True, False, False, True, True, False, False]
+    starts = [0] * 11
+    # A jump into and out of frames without evidence is no jump of the Sun.
+    assert whole_clip._without_dark_segments([0, 2, 5, 7, 9, 11], measured, starts) == [0, 7, 11]
+    # Between two segments with evidence the jump stays; a caller's start
+    # (times going back) always stays.
+    starts[9] = 1
+    assert whole_clip._without_dark_segments([0, 7, 9, 11], measured, starts) == [0, 7, 9, 11]
