@@ -388,6 +388,12 @@ def _run(argv, interrupt):
     timing = track.extra.get("timing", {})
     print(f"sunlapse: {done}/{len(track.frames)} frames estimated "
           f"(tracking {timing.get('tracking_ms_per_frame', 0):.1f} ms/frame)")
+    dark = track.without_sunlight()
+    if dark:
+        predicted = sum(f.predicted for f in track.frames if f.frame in set(dark))
+        print(f"sunlapse: no direct sunlight on {len(dark)} frame(s) "
+              f"({trackfile.frame_ranges(dark)}): {predicted} of them have their Sun "
+              f"predicted from the path, at confidence 0")
     if args.apply_lamp or args.render_ar:
         interrupt.check()
         try:
@@ -397,6 +403,9 @@ def _run(argv, interrupt):
         context.scene.sunlapse.sun_lamp = sun
         keyed = len(sun.get(keys.KEYED_FRAMES_PROP, []))
         print(f"sunlapse: keyed Sun lamp '{sun.name}' on {keyed} frames")
+        if dark:
+            print("sunlapse: the lamp's strength is keyed to 0 on the frames without "
+                  "direct sunlight")
         skipped = track.extrapolated()
         if skipped:
             print(f"sunlapse: warning: {len(skipped)} frame(s) beyond the measured ones "

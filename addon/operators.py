@@ -311,6 +311,9 @@ class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
         msg = (f"Keyed '{sun.name}' ({sun.rotation_mode}) on {len(keyed)} frames "
                f"({keyed[0]}-{keyed[-1]})" + (", sky" if sky is not None else "")
                + (", strength" if settings.keyframe_strength else ""))
+        dark = track.without_sunlight()
+        if dark:
+            msg += f"; off on {len(dark)} frame(s) without direct sunlight"
         level = "INFO"
         if settings.sync_sky and sky is None:
             msg += (". Keyframe Sky is on but the world has no Sky Texture node: only the "

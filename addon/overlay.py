@@ -11,7 +11,7 @@ are turned on and off in the editor's Overlays popover (Display in 3.x).
 import bpy
 
 from .blender import compat, store
-from .core import angles
+from .core import angles, trackfile
 
 _handle = None
 
@@ -30,6 +30,7 @@ ELEVATION_COLOR = (1.0, 0.6, 0.1, 1.0)
 AZIMUTH_COLOR = (0.35, 0.65, 1.0, 1.0)
 CONFIDENCE_COLOR = (0.55, 0.85, 0.55, 1.0)
 PLOT_BACK = (0.0, 0.0, 0.0, 0.6)
+UNLIT_SHADE = (0.25, 0.3, 0.55, 0.35)  # frames without direct sunlight
 PLOT_GAP = 16  # pixels between strips, for their titles
 
 
@@ -86,6 +87,16 @@ def plot_layout(track, frame, x0, y0, w, h, size=11.0, text_width=_text_width):
     conf = [(x0 + w * (f.frame - f0) / span, sy + strip_h * max(0.0, min(1.0, f.confidence)))
             for f in track.frames]
     strips.append(("Confidence (0-1)", CONFIDENCE_COLOR, (0.0, 1.0), conf, sy, strip_h))
+    # Runs of frames without direct sunlight, shaded across the strips.
+    unlit, x_of = [], (lambda f: x0 + w * (f - f0) / span)
+    for f in track.frames:
+        if f.sunlight != trackfile.Sunlight.NO:
+            continue
+        half = 0.5 * w / span
+        if unlit and f.frame - unlit[-1][2] == 1:
+            unlit[-1] = (unlit[-1][0], x_of(f.frame) + half, f.frame)
+        else:
+            unlit.append((x_of(f.frame) - half, x_of(f.frame) + half, f.frame))
     cur = track.frame(frame)
     values = None
     if cur is not None and cur.has_estimate:
@@ -97,9 +108,13 @@ def plot_layout(track, frame, x0, y0, w, h, size=11.0, text_width=_text_width):
     if values is not None:
         el, azimuth, conf = values
         text = f"frame {frame}: elevation {el:.1f}°  azimuth {azimuth:.1f}°  confidence {conf:.2f}"
+        if cur.predicted:
+            text += "  (predicted: no sunlight)" if cur.sunlight == trackfile.Sunlight.NO \
+                else "  (predicted)"
         labels.append((text, x0, y0 + h + 0.6 * size))
     return {"strips": strips, "marker_x": x0 + w * (min(max(frame, f0), f1) - f0) / span,
-            "frames": (f0, f1), "values": values, "labels": labels, "box": (x0, y0, w, h)}
+            "frames": (f0, f1), "values": values, "labels": labels, "box": (x0, y0, w, h),
+            "unlit": [(a, b) for a, b, _ in unlit]}
 
 
 def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
@@ -122,6 +137,11 @@ def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):
     shader.uniform_float("color", PLOT_BACK)
     batch_for_shader(shader, "TRIS", {"pos": [(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by0),
                                               (bx1, by1), (bx0, by1)]}).draw(shader)
+    if plot["unlit"]:  # frames without direct sunlight: their Sun is the path's
+        shader.uniform_float("color", UNLIT_SHADE)
+        batch_for_shader(shader, "TRIS", {"pos": [
+            p for a, b in plot["unlit"] for p in ((a, y0), (b, y0), (b, y0 + h), (a, y0),
+                                                  (b, y0 + h), (a, y0 + h))]}).draw(shader)
     for title, color, (lo, hi), pts, sy, sh in plot["strips"]:
         shader.uniform_float("color", (1, 1, 1, 0.25))
         batch_for_shader(shader, "LINES", {"pos": [(x0, sy), (x0 + w, sy), (x0, sy + sh),

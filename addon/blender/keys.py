@@ -6,6 +6,7 @@ import math
 
 from . import compat, lamp
 from ..core import angles
+from ..core.trackfile import Sunlight
 
 KEYED_FRAMES_PROP = "sunlapse_frames"
 
@@ -46,25 +47,35 @@ def sky_node(scene):
     return None
 
 
-def _key_strength(sun, frames):
-    """Lamp strength per frame in proportion to the measured sun/ambient
-    ratio: the lamp's present strength stands for the clip's median ratio, so
-    a passing haze or the Sun getting low dims it as in the footage."""
-    ratios = [f.sun_ambient_ratio for f in frames if f.sun_ambient_ratio]
+def _key_strength(sun, frames, follow_ratio):
+    """Lamp strength per frame: off where the frame has no direct sunlight
+    (night, twilight, cloud: the sky carries the light); with follow_ratio
+    in proportion to the measured sun/ambient ratio elsewhere (the lamp's
+    present strength stands for the clip's median ratio, so a passing haze
+    or the Sun getting low dims it as in the footage), else the lamp's
+    present strength. Returns how many frames were keyed."""
+    ratios = sorted(f.sun_ambient_ratio for f in frames if f.sun_ambient_ratio)
     data = sun.data
     _remove_own_keys(data, {"energy"}, data.get(KEYED_FRAMES_PROP, []))
-    if len(ratios) < 2:
+    dark = any(f.sunlight == Sunlight.NO for f in frames)
+    follow_ratio = follow_ratio and len(ratios) >= 2
+    if not (dark or follow_ratio):
         return 0
-    ratios_sorted = sorted(ratios)
-    median = ratios_sorted[len(ratios_sorted) // 2]
+    median = ratios[len(ratios) // 2] if follow_ratio else 1.0
     base = data.get("sunlapse_base_energy", data.energy)
     data["sunlapse_base_energy"] = base
     keyed = []
     for f in frames:
-        if f.sun_ambient_ratio:
+        if f.sunlight == Sunlight.NO:
+            data.energy = 0.0
+        elif follow_ratio and f.sun_ambient_ratio:
             data.energy = base * f.sun_ambient_ratio / median
-            data.keyframe_insert("energy", frame=f.frame)
-            keyed.append(f.frame)
+        elif dark:
+            data.energy = base
+        else:
+            continue
+        data.keyframe_insert("energy", frame=f.frame)
+        keyed.append(f.frame)
     data.energy = base
     data[KEYED_FRAMES_PROP] = keyed
     return len(keyed)
@@ -73,9 +84,11 @@ def _key_strength(sun, frames):
 def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=False):
     """Keys the Sun lamp (created if needed) on every estimated frame; returns it.
 
-    Running it again replaces its own keys only. With keyframe_strength the
-    lamp's strength follows the measured sun/ambient ratio. Frames that only
-    extrapolate beyond the measured ones are not keyed (Track.extrapolated).
+    Running it again replaces its own keys only. The lamp's strength is
+    keyed off on frames without direct sunlight, and with keyframe_strength
+    follows the measured sun/ambient ratio. Frames that only extrapolate
+    beyond the measured ones are not keyed (Track.extrapolated); frames
+    whose Sun is predicted are.
     """
     frames = track.keyable()
     if not frames:
@@ -88,8 +101,7 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
         lamp.point_lamp(sun, f.zenith_deg, _azimuth_world(track, f), frame=f.frame)
     sun[KEYED_FRAMES_PROP] = [f.frame for f in frames]
     _linear(sun, paths)
-    if keyframe_strength:
-        _key_strength(sun, frames)
+    _key_strength(sun, frames, keyframe_strength)
     node = sky_node(context.scene) if sync_sky else None
     if node is not None:
         world = context.scene.world

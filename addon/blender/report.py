@@ -7,7 +7,7 @@ from collections import Counter
 
 from . import store
 from .place import settings_zone
-from ..core import clock
+from ..core import clock, trackfile
 
 
 def finish_run(context, track, clip, extra):
@@ -17,11 +17,15 @@ def finish_run(context, track, clip, extra):
     store.store_track(track)
     done = len(track.estimated())
     raw = sum(1 for f in track.frames if f.raw_zenith_deg is not None)
+    dark = sum(1 for f in track.frames if _dark(f))
     msg = (f"Sun estimated on {done}/{len(track.frames)} frames ({raw} measured"
-           + (", the rest from smoothing)" if done > raw else ")"))
-    # What kept frames from a measurement, in the user's words.
+           + (f", {dark} predicted without direct sunlight" if dark else "")
+           + (", the rest from smoothing)" if done > raw + dark else ")"))
+    # What kept frames from a measurement, in the user's words (night is
+    # no fault: said above).
     problems = [p.message for p in track.problems if p.is_warning]
-    reasons = Counter(f.reason for f in track.frames if f.raw_zenith_deg is None and f.reason)
+    reasons = Counter(f.reason for f in track.frames
+                      if f.raw_zenith_deg is None and f.reason and not _dark(f))
     if reasons and track.problem("estimate") is None:
         reason, count = reasons.most_common(1)[0]
         problems.append(f"{count} frame(s): {reason}")
@@ -33,9 +37,15 @@ def finish_run(context, track, clip, extra):
     return msg
 
 
+def _dark(f):
+    """A frame without direct sunlight whose Sun is its path's: told, not
+    a shortcoming of the run."""
+    return f.predicted and f.sunlight == trackfile.Sunlight.NO
+
+
 def report_level(track):
     """WARNING when frames lack a measurement or a stage had to give up."""
-    short = any(f.raw_zenith_deg is None for f in track.frames)
+    short = any(f.raw_zenith_deg is None and not _dark(f) for f in track.frames)
     troubled = any(p.is_warning for p in track.problems)
     return {"WARNING"} if short or troubled else {"INFO"}
 

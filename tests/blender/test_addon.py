@@ -220,6 +220,27 @@ def test_the_plots_readout_never_covers_its_own_labels(n_frames):
                 assert apart, (frame, plot["labels"])
 
 
+def test_the_plot_shades_the_frames_without_sunlight_and_says_predicted():
+    """Issue 25: frames without direct sunlight are shaded across the plot,
+    one band per run of frames, and the readout says a Sun is predicted."""
+    from sunlapse import overlay
+    from sunlapse.core import trackfile
+    frames = [{"frame": f, "zenith_deg": 70.0 + 2.0 * f, "azimuth_deg": 250.0,
+               "confidence": 0.0 if f > 10 else 0.9,
+               "sunlight": "no" if f > 10 or f == 4 else "yes", "predicted": f > 10}
+              for f in range(1, 15)]
+    track = trackfile.from_json({"format": trackfile.FORMAT_TRACK, "version": 1,
+                                 "frames": frames})
+    x0, w = 50, 520
+    plot = overlay.plot_layout(track, 12, x0, 30, w, 190, 11)
+    step = w / 13
+    assert [(round(a, 3), round(b, 3)) for a, b in plot["unlit"]] == [
+        (round(x0 + 2.5 * step, 3), round(x0 + 3.5 * step, 3)),
+        (round(x0 + 9.5 * step, 3), round(x0 + 13.5 * step, 3))]
+    assert plot["labels"][2][0].endswith("(predicted: no sunlight)")
+    assert "predicted" not in overlay.plot_layout(track, 2, x0, 30, w, 190, 11)["labels"][2][0]
+
+
 def test_the_overlay_toggles_sit_in_the_clip_editors_overlay_popover():
     """Plot over Clip sat in the Lamp and Render panel; Blender users look
     for overlays in the editor's Overlays popover (Display before 4.2)."""

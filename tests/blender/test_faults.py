@@ -466,6 +466,27 @@ def test_apply_keys_no_extrapolated_frame(empty_scene):
     assert list(sun[keys.KEYED_FRAMES_PROP]) == [3, 4, 5]
 
 
+def test_apply_keys_the_lamp_off_where_there_is_no_direct_sunlight(empty_scene):
+    """Issue 25: dusk frames flagged without sunlight, their Sun predicted
+    below the horizon, are keyed (the lamp's direction follows the path) and
+    the lamp's strength is keyed to 0 there; the user's strength elsewhere."""
+    from sunlapse.blender import compat, keys
+    from sunlapse.core import trackfile
+    lit = [trackfile.FrameEstimate(frame=f, zenith_deg=80.0 + f, azimuth_deg=250.0,
+                                   raw_zenith_deg=80.0 + f, raw_azimuth_deg=250.0,
+                                   confidence=0.9, sunlight=trackfile.Sunlight.YES)
+           for f in range(1, 6)]
+    dark = [trackfile.FrameEstimate(frame=f, zenith_deg=80.0 + f, azimuth_deg=250.0,
+                                    confidence=0.0, sunlight=trackfile.Sunlight.NO,
+                                    predicted=True) for f in range(6, 9)]
+    sun = keys.apply_track(bpy.context, trackfile.Track(frames=lit + dark))
+    assert list(sun[keys.KEYED_FRAMES_PROP]) == list(range(1, 9))
+    energy = [fc for fc in compat.fcurves(sun.data) if fc.data_path == "energy"]
+    assert len(energy) == 1
+    for f in range(1, 9):
+        assert energy[0].evaluate(f) == pytest.approx(4.0 if f <= 5 else 0.0), f
+
+
 def test_apply_says_when_the_sky_it_should_key_is_missing(empty_scene):
     """Keyframe Sky on a world without a Sky Texture keyed nothing and said
     nothing; the panel's line now says only the lamp was keyed, on the
