@@ -87,19 +87,28 @@ def chronological(frames: Sequence[int], times: Optional[Sequence[dt.datetime]])
 
 def orderless(times: Sequence[dt.datetime]) -> Optional[str]:
     """Why `times` say nothing of the order the frames were taken in, or
-    None when they do: at least half the frames share their time with
-    another frame (every frame the same time; dates without times of day,
-    every frame of a day at midnight)."""
+    None when they do. They do not when every frame has the same time, or
+    when at least half the frames share their time with another and the
+    times are whole days apart (dates without times of day) or a time's
+    frames lie apart. A capture repeated over consecutive frames (the
+    Marseille January clip shows each capture 13 times) still orders them."""
     if len(times) < 2:
         return None
     counts = Counter(times)
+    if len(counts) == 1:
+        return "every frame has the same time"
     shared = sum(c for c in counts.values() if c > 1)
     if 2 * shared < len(times):
         return None
-    if len(counts) == 1:
-        return "every frame has the same time"
-    return (f"{shared} of {len(times)} frames share their time with another "
-            f"({len(counts)} different times: dates without times of day?)")
+    first = min(counts)
+    if all((t - first).total_seconds() % 86400.0 == 0.0 for t in counts):
+        return (f"{shared} of {len(times)} frames share their time with another, "
+                f"{len(counts)} different times whole days apart: dates without times of day?")
+    runs = 1 + sum(times[i] != times[i - 1] for i in range(1, len(times)))
+    if runs == len(counts):
+        return None  # each time's frames together: a capture repeated
+    return (f"{shared} of {len(times)} frames share their time with another, "
+            f"in {runs} runs of {len(counts)} different times")
 
 
 def seconds_since(times: Sequence[dt.datetime]) -> List[float]:

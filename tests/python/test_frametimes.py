@@ -77,3 +77,9 @@ def test_times_that_cannot_order_the_frames_are_told_apart():
     days = [dt.datetime(2025, 6, 21 + k // 3, tzinfo=dt.timezone.utc) for k in range(9)]
     why = clock.orderless(days)
     assert why is not None and "9 of 9 frames" in why and "3 different times" in why
+    # Each capture repeated over consecutive frames (Marseille, January)
+    # still orders the clip; the same times jumbled do not.
+    repeated = [s for s in step for _ in range(13)]
+    assert clock.orderless(repeated) is None
+    jumbled = step * 3
+    assert "in 30 runs of 10 different times" in clock.orderless(jumbled)
