@@ -11,7 +11,8 @@ the track file are a fixed contract (the accuracy benchmarks use them):
 Extensions (optional, later than the contract): --times CSV (each frame's
 capture time, see core/frametimes.py; default: the panel's Frame Times),
 --latitude/--longitude/--date/--start-time/--utc-offset/--frame-seconds/
---fixed-latitude (place and time for physical smoothing), --initial-sun Z A.
+--fit-latitude, --fixed-latitude (place and time for physical smoothing),
+--initial-sun Z A.
 
 On failure: one line "sunlapse: error: <reason>" on stderr and a non-zero
 code (2 a bad flag or file named on the command line, 3 the scene or clip
@@ -76,9 +77,12 @@ def build_parser():
                        help="hours, e.g. 2 for CEST (default: the scene's UTC Offset, "
                             "else Sun Position's, else 0)")
     place.add_argument("--frame-seconds", type=float, help="seconds between frames")
-    place.add_argument("--fixed-latitude", action="store_true",
-                       help="the latitude is known exactly: fit only the time and north "
-                            "offsets (default: the latitude is fitted too, near the given one)")
+    latitude = place.add_mutually_exclusive_group()
+    latitude.add_argument("--fit-latitude", action="store_true",
+                          help="fit the latitude too, near the given one (default: the "
+                               "latitude is used as given)")
+    latitude.add_argument("--fixed-latitude", action="store_true",
+                          help="use the latitude as given (the default; kept for scripts)")
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
@@ -309,7 +313,7 @@ def place_flags(args):
         date=dt.date.fromisoformat(args.date) if args.date else None,
         start_hours=parse_clock(args.start_time) if args.start_time else None,
         utc_offset_hours=args.utc_offset, frame_seconds=args.frame_seconds,
-        fixed_latitude=args.fixed_latitude)
+        fit_latitude=True if args.fit_latitude else False if args.fixed_latitude else None)
 
 
 def _run(argv, interrupt):

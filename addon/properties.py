@@ -85,9 +85,9 @@ class SunlapseSettings(bpy.types.PropertyGroup):
                     "sub-seconds) and GPS position from its EXIF data when no times file "
                     "is given")
     fit_latitude: BoolProperty(
-        name="Fit Latitude", default=True,
+        name="Fit Latitude", default=False,
         description="Physical smoothing also fits the latitude near the given one; off: "
-                    "the latitude is known exactly")
+                    "the latitude is used as given")
     frame_seconds: FloatProperty(name="Seconds per Frame", min=0, default=0.0,
                                  description="Time between two frames of the time-lapse")
     times_file: StringProperty(

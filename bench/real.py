@@ -57,7 +57,7 @@ def confident_only(track):
 # clocked by the frames' times; the place comes from the .blend).
 FLAGS = {"default": ["--method", "default"],
          "thesis": ["--method", "thesis"],
-         "physical": ["--method", "default", "--smoothing", "physical"],
+         "physical": ["--method", "default", "--smoothing", "physical", "--fit-latitude"],
          "physical_lat": ["--method", "default", "--smoothing", "physical", "--fixed-latitude"]}
 
 

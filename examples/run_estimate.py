@@ -8,7 +8,7 @@ Contract (the accuracy benchmarks call it exactly so; extend, never break):
       [--apply-lamp] [--save OUT.blend] [--render-ar DIR] \
       [--times CSV] [--latitude DEG] [--longitude DEG] [--date YYYY-MM-DD] \
       [--start-time HH:MM[:SS]] [--utc-offset HOURS] [--frame-seconds S] \
-      [--fixed-latitude] [--initial-sun ZENITH AZIMUTH]
+      [--fit-latitude | --fixed-latitude] [--initial-sun ZENITH AZIMUTH]
 
 Flags:
   --out TRACK.json      the track file to write (*.sun.json; docs/track-format.md)
@@ -31,7 +31,11 @@ Flags:
   --start-time HH:MM    the first frame's local time  } Sun Position add-on's
   --utc-offset HOURS    the local times' offset from UTC (e.g. 2 for CEST)
   --frame-seconds S     seconds between frames
-  --fixed-latitude      keep the given latitude exactly (default: fitted near it)
+  --fit-latitude        fit the latitude too, near the given one (default: the
+                        panel's Fit Latitude, off unless set: the latitude is
+                        used as given)
+  --fixed-latitude      use the given latitude as given: the default since
+                        issue 25, kept so that scripts that pass it still run
   --initial-sun Z A     start from this Sun on the first frame (degrees, azimuth
                         as in the track file) instead of estimating it: measures
                         the tracker alone

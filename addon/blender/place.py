@@ -27,7 +27,7 @@ class PlaceTimeFlags:
     start_hours: Optional[float] = None
     utc_offset_hours: Optional[float] = None
     frame_seconds: Optional[float] = None
-    fixed_latitude: bool = False
+    fit_latitude: Optional[bool] = None   # --fit-latitude / --fixed-latitude
 
 
 def settings_zone(settings) -> dt.tzinfo:
@@ -50,8 +50,8 @@ def place_and_time(context, settings, options, gps: Optional[Tuple[float, float]
     if gps is not None:  # the frames' own GPS fix is the place
         options.latitude_deg, options.longitude_deg = gps
     if flags is not None:
-        if flags.fixed_latitude:
-            options.fit_latitude = False
+        if flags.fit_latitude is not None:
+            options.fit_latitude = flags.fit_latitude
         for key, value in _with_flags(context, options, flags).items():
             setattr(options, key, value)
 

@@ -200,6 +200,15 @@ def test_scripted_run_with_physical_smoothing(tiny_plaza, tmp_path):
     assert track["north_offset_deg"] == fit["north_offset_deg"]
     for f, t in zip(track["frames"], truth.frames):  # geographic azimuths now
         assert abs(((f["azimuth_deg"] - t.azimuth_deg) + 180) % 360 - 180) < 5
+    # The place the user typed is used as given (issue 25); --fit-latitude
+    # asks for the latitude to be fitted near it.
+    assert fit["latitude_deg"] == 48.85 and fit["latitude_fitted"] is False
+    proc = run_estimate(os.path.join(out, "scene.blend"), path, *flags, "--fit-latitude")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert json.load(open(path))["sun_path_fit"]["latitude_fitted"] is True
+    proc = run_estimate(os.path.join(out, "scene.blend"), path, *flags, "--fit-latitude",
+                        "--fixed-latitude")
+    assert proc.returncode == 2 and "not allowed with" in proc.stderr
 
 
 def test_panel_physical_smoothing_uses_the_panels_place_and_time(tiny_plaza):

@@ -21,6 +21,7 @@ def test_the_contract_documents_every_flag():
     missing = [f for f in flags() if f not in doc]
     assert not missing, f"examples/run_estimate.py does not document {missing}"
     assert "--times" in flags() and "--fixed-latitude" in flags()  # the check sees them
+    assert "--fit-latitude" in flags()
 
 
 def test_the_cli_offers_the_estimates_choices():
