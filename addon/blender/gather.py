@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence, Set
+from typing import Dict, List, Optional, Sequence
 
 import bpy
 import numpy as np
@@ -453,16 +453,18 @@ def build_scene(model: Model):
 VIEW_GRID = (64, 36)
 
 
-def objects_in_view(scene, camera, info: CameraInfo) -> Set[int]:
-    """The ids of the objects a grid of VIEW_GRID camera rays hits (empty:
-    the camera sees none of the model)."""
+def objects_in_view(scene, camera, info: CameraInfo) -> Dict[int, float]:
+    """The share of a grid of VIEW_GRID camera rays that hits each object,
+    by id (empty: the camera sees none of the model)."""
     w, h = info.params["width"], info.params["height"]
     gx, gy = VIEW_GRID
     xs, ys = np.meshgrid((np.arange(gx) + 0.5) * w / gx - 0.5,
                          (np.arange(gy) + 0.5) * h / gy - 0.5)
     px = np.ascontiguousarray(np.stack([xs.ravel(), ys.ravel()], axis=1), dtype=np.float64)
     hits = scene.intersect_pixels(camera, px)
-    return {int(i) for i in np.asarray(hits["object_id"])[np.asarray(hits["hit"], dtype=bool)]}
+    ids = np.asarray(hits["object_id"])[np.asarray(hits["hit"], dtype=bool)]
+    found, counts = np.unique(ids, return_counts=True)
+    return {int(i): float(c) / len(px) for i, c in zip(found, counts)}
 
 
 def marked_points(clip, frame):

@@ -158,7 +158,8 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
 def view_doubts(model, cam, scene, camera, ground: List[str]) -> List[str]:
     """What the camera sees of the model: a SceneError when nothing (a camera
     not matched to the footage, or aimed away), warnings for a ground that
-    is out of view."""
+    is out of view or covers little of it (a bollard's top named as the
+    ground: the Sun came out 4-9 deg off)."""
     seen = gather.objects_in_view(scene, camera, cam)
     if not seen:
         raise gather.SceneError(
@@ -167,8 +168,18 @@ def view_doubts(model, cam, scene, camera, ground: List[str]) -> List[str]:
             f"model lies over the objects it stands for")
     out = []
     for name in ground:
-        if not any(i in seen for i in model.ids_of([name])):
+        share = sum(seen.get(i, 0.0) for i in model.ids_of([name]))
+        if share == 0.0:
             out.append(f"the ground '{name}' is out of the camera's view: the shadows are looked "
                        f"for on a surface the footage does not show (pick the surface they fall "
                        f"on as Ground)")
+        elif share < GROUND_MIN_VIEW_SHARE:
+            out.append(f"the ground '{name}' covers only {100 * share:.1f}% of the camera's "
+                       f"view: the tracked shadows are looked for on it alone (pick the "
+                       f"surface the shadows fall on as Ground)")
     return out
+
+
+# A ground the shadows are followed on covers a fair part of the view: a
+# bollard's top or a step covers under 1%, a plaza's paving 30-90%.
+GROUND_MIN_VIEW_SHARE = 0.03

@@ -126,13 +126,20 @@ CIRCLE_INLIER_FLOOR_DEG = 1.5
 # it: the Sun's shadows, sharp where the Sun puts them, with the
 # sun/ambient contrast across their edges at least SUNLIT_MIN_CONTRAST (on
 # the suite 1017 of 1024 frames refine at >= 1; at dusk it fits 0.6-1.0 on
-# frames whose Sun has just set). Where the tracker never ran (no ground)
-# the sky's evidence is all there is. A Sun below the horizon, the frame's
+# frames whose Sun has just set); a frame it could not confirm, by how much
+# of it the sky's evidence explains (SUNLIT_EXPLAINED_SHARE). A Sun below the horizon, the frame's
 # own or its segment's circle's, lights no ground, whatever the frame shows
 # (a grazing Sun's fitted contrast means nothing: the tracker fitted 5-9 on
 # suite frames whose Sun had set by 0.3 deg). A readable frame without
 # sunlight, in a segment whose other frames show it, says NO; else UNKNOWN.
 SUNLIT_MIN_CONTRAST = 1.0
+# A frame with evidence of its own that the tracker could not confirm (a
+# ground the tracker cannot use: a bollard named as the ground left 8 of the
+# plaza's 32 sunny frames unconfirmed) is in sunlight while its best
+# direction explains at least this share of what it explains on the median
+# frame the tracker confirmed: ambient shading explained 0.2 of the variance
+# on test_whole_clip's dusk frames where the Sun's shadows explained 0.7.
+SUNLIT_EXPLAINED_SHARE = 0.5
 # A segment the path jumped to (no capture times to explain it) stands only
 # on a frame in sunlight whose own evidence leads far rivals by this much
 # (log-likelihood; path.margin); else it joins the segment before it. At
@@ -629,14 +636,17 @@ class _WholeClip:
         without it keep no Sun of their own and confidence 0, and a segment
         of such frames joins the one before it (or after)."""
         frames = self.result.frames
-        tracker_ran = any(r.refined for r in frames)
+        tracked = [r.sun_in_world is not None and r.refined and
+                   _contrast(r.tracked) >= SUNLIT_MIN_CONTRAST for r in frames]
+        explained = self.path.explained
+        shares = sorted(explained[k] for k, ok in enumerate(tracked) if ok)
+        typical = shares[len(shares) // 2] if shares else 0.0
         for k, r in enumerate(frames):
-            if r.sun_in_world is None:
-                sunlit = False
-            elif tracker_ran:
-                sunlit = r.refined and _contrast(r.tracked) >= SUNLIT_MIN_CONTRAST
-            else:  # no ground to track on: the sky's evidence alone
-                sunlit = r.measured
+            # The tracker's fit, else (no ground to track on, or its fit
+            # failed) the sky's evidence explaining the frame as well as on
+            # the frames the tracker confirmed.
+            sunlit = tracked[k] or (r.sun_in_world is not None and r.measured and
+                                    explained[k] >= SUNLIT_EXPLAINED_SHARE * typical)
             r.sunlight = Sunlight.YES if sunlit else \
                 Sunlight.NO if self.usable[k] else Sunlight.UNKNOWN
         bounds = _without_dark_segments(

@@ -148,6 +148,10 @@ def test_a_ground_out_of_view_is_named_in_a_warning(monkeypatch):
     doubts = job.view_doubts(model, cam, None, None, ["Plane"])
     assert len(doubts) == 1 and "'Plane' is out of the camera's view" in doubts[0]
     assert job.view_doubts(model, cam, None, None, ["Box"]) == []
+    # A bollard's top named as the ground: a sliver of the view.
+    monkeypatch.setattr(gather, "objects_in_view", lambda *a: {0: 0.004, 1: 0.6})
+    doubts = job.view_doubts(model, cam, None, None, ["Plane"])
+    assert len(doubts) == 1 and "'Plane' covers only 0.4% of the camera's view" in doubts[0]
     monkeypatch.setattr(gather, "objects_in_view", lambda *a: {})
     with pytest.raises(gather.SceneError, match="sees none of the model"):
         job.view_doubts(model, cam, None, None, ["Plane"])
