@@ -148,6 +148,19 @@ SUNLIT_EXPLAINED_SHARE = 0.5
 # noon line, 58 deg off at confidence up to 0.93: no frame of it led by
 # more than 5.1, where a real cut's frames lead by 12-25.
 SEGMENT_MIN_MARGIN = 8.0
+# Without capture times a loop whose Sun goes back less than the path's
+# largest step (12 deg a frame) was one segment, smoothed across the loop
+# (4.7 deg off on test_whole_clip's four loops): the clip going back along
+# the Sun's path starts a segment (_going_back). Groups of at least
+# LOOP_GROUP frames (at most LOOP_GROUP_MAX) spanning LOOP_MOTION_DEG of the
+# path on either side; going back more than LOOP_BACK_DEG and
+# LOOP_SCATTER_TIMES their scatter (refined Suns scatter by tenths of a
+# degree; a low Sun's by up to 10 along its shadows).
+LOOP_GROUP = 4
+LOOP_GROUP_MAX = 12
+LOOP_MOTION_DEG = 1.0
+LOOP_BACK_DEG = 2.0
+LOOP_SCATTER_TIMES = 3.0
 # A frame whose Sun is this far off its segment's circle shows shadows that
 # are not the Sun's where the path puts it (an engraved line, a dark
 # object): it is not counted as in sunlight (UNKNOWN) and gets the path.
@@ -302,6 +315,65 @@ def _evidence_support(first: _Path, again: _Path,
     return out
 
 
+def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> List[int]:
+    """Positions where the clip goes back along the Sun's path (a loop, a
+    cut to earlier footage). Around each position, a group of frames before
+    and one from there, each spanning about LOOP_MOTION_DEG of the Sun's
+    path: where the Sun moves the same way through both, the middle Sun of
+    the group from there lies behind the middle Sun of the group before, by
+    more than LOOP_BACK_DEG and LOOP_SCATTER_TIMES the frames' scatter, and
+    as near as that to a Sun of the path already travelled; of neighbouring
+    positions, the one going back furthest. suns: per frame the Sun in
+    sunlight (None: none); starts: segments already known. Not confidence:
+    a loop the path could not follow leaves its frames doubted."""
+    seen = [k for k, s in enumerate(suns) if s is not None]
+    if len(seen) < 2 * LOOP_GROUP:
+        return []
+    sun = {k: np.asarray(suns[k], float) for k in seen}
+    step = float(np.median([_angle_deg(sun[j], sun[k]) for j, k in zip(seen, seen[1:])]))
+    g = int(min(LOOP_GROUP_MAX, max(LOOP_GROUP, math.ceil(LOOP_MOTION_DEG / max(step, 1e-3)))))
+
+    def middle(ks: Sequence[int]) -> np.ndarray:
+        m = np.median([sun[k] for k in ks], axis=0)  # per component: strays do not move it
+        return m / np.linalg.norm(m)
+
+    def motion(ks: Sequence[int]) -> np.ndarray:
+        """From the middle of a group's first half to its second's (a low
+        Sun's scatter along its shadows is no motion)."""
+        return middle(ks[len(ks) // 2:]) - middle(ks[:len(ks) // 2])
+    first_of, first = [], 0  # per position in `seen`: where its segment starts
+    for i, k in enumerate(seen):
+        if i > 0 and any(starts[j] for j in range(seen[i - 1] + 1, k + 1)):
+            first = i
+        first_of.append(first)
+    back = {}
+    for i in range(g, len(seen) - g + 1):
+        before, after = seen[i - g:i], seen[i:i + g]
+        if any(starts[j] for j in range(before[0] + 1, after[-1] + 1)):
+            continue
+        mb, ma = motion(before), motion(after)
+        if float(np.dot(mb, ma)) <= 0.5 * float(np.linalg.norm(mb) * np.linalg.norm(ma)):
+            continue  # not one steady motion on both sides (or none)
+        along = mb + ma
+        along /= np.linalg.norm(along)
+        behind = -math.degrees(float(np.dot(middle(after) - middle(before), along)))
+        # Low Suns' raw zeniths scatter by up to 10 deg along their long
+        # shadows: going back must stand out of the frames' own scatter
+        # (each frame off the middle of its neighbours: steady motion is no
+        # scatter).
+        scatter = max(_angle_deg(sun[k], sun[j] + sun[m])
+                      for ks in (before, after) for j, k, m in zip(ks, ks[1:], ks[2:]))
+        limit = max(LOOP_BACK_DEG, LOOP_SCATTER_TIMES * scatter)
+        # ... back onto the path it travelled (a run of frames misled the
+        # same way looks like a jump, but leads nowhere the Sun has been).
+        there = middle(after)
+        if behind > limit and any(_angle_deg(sun[k], there) <= limit
+                                  for k in seen[first_of[i - g]:i - g]):
+            back[i] = behind
+    return [seen[i] for i in sorted(back)
+            if back[i] >= max(back.get(i - 1, 0.0), back.get(i + 1, 0.0))]
+
+
 def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
                            starts: Sequence[int]) -> List[int]:
     """Segment bounds (frame positions, first 0, last n) without the jumps
@@ -400,10 +472,12 @@ class _WholeClip:
         self.result.tracker_pixel_scale = camera.width / self.work.width
         # Segments the caller knows of: capture times going back.
         self.starts = [0] * self.n
+        self.known_starts = self.starts  # the caller's (times going back)
         if times_s is not None:
             for k in range(1, self.n):
                 if times_s[k] < times_s[k - 1]:
                     self.starts[k] = 1
+        self.known_starts = list(self.starts)
         # A refined Sun further than steer_deg from the path's direction is
         # not believed (the tracker locked onto something else): the pass's
         # own steering limit, also the check's.
@@ -428,8 +502,14 @@ class _WholeClip:
         # Sun bent it over the lit frames before them).
         ignored = [int(bool(self.path.measured[k]) and r.sunlight != Sunlight.YES)
                    for k, r in enumerate(self.result.frames)]
-        if any(ignored):
+        # Without times, the clip going back along the Sun's path (a loop)
+        # starts a segment, even where the step is one the path allows.
+        cuts = [] if self.times_s is not None else _going_back(
+            [r.sun_in_world if r.sunlight == Sunlight.YES else None
+             for r in self.result.frames], self.starts)
+        if any(ignored) or cuts:
             self.ignored = ignored
+            self.starts = [1 if k in cuts else s for k, s in enumerate(self.starts)]
             if not self.path_and_check():
                 return self.result
             self.mark("dark_again")
@@ -565,7 +645,7 @@ class _WholeClip:
         self.bounds = _without_dark_segments(
             [0] + [k for k in range(1, n) if path.jump_before[k]] + [n],
             path.measured, self.starts)
-        self.result.jumps = [frames[k] for k in self.bounds[1:-1] if not self.starts[k]]
+        self.result.jumps = [frames[k] for k in self.bounds[1:-1] if not self.known_starts[k]]
         d = self.directions
         self.result.evidence = {
             "explained": [round(v, 3) for v in path.explained],
@@ -654,7 +734,8 @@ class _WholeClip:
                           for k, r in enumerate(frames)], self.starts)
         if bounds != self.bounds:
             self.bounds = bounds
-            self.result.jumps = [self.frames[k] for k in bounds[1:-1] if not self.starts[k]]
+            self.result.jumps = [self.frames[k] for k in bounds[1:-1]
+                                 if not self.known_starts[k]]
             self.result.segments = [self.frames[lo:hi] for lo, hi in zip(bounds, bounds[1:])]
             for s, (lo, hi) in enumerate(zip(bounds, bounds[1:])):
                 for r in frames[lo:hi]:

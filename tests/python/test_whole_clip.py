@@ -415,3 +415,24 @@ def test_dark_segments_join_their_neighbours():
     # (times going back) always stays.
     starts[9] = 1
     assert whole_clip._without_dark_segments([0, 7, 9, 11], measured, starts) == [0, 7, 9, 11]
+
+
+def test_a_loop_whose_sun_goes_back_less_than_a_step_is_split(world):
+    """Four loops of a clip whose Sun moves half a degree a frame: going
+    back 9 deg at each loop is a step the untimed path allows (12 deg), so
+    it was one segment, and the smoothing across the loops ran 4.7 deg off
+    (issue 25). The Sun going back along its path starts a segment."""
+    n = 20
+    once = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(n)]
+    truth = once * 4
+    result = run(world, [draw(world, d, k) for k, d in enumerate(truth)], None,
+                 trimmed_circle.fit_trimmed)
+    assert result.jumps == [n + 1, 2 * n + 1, 3 * n + 1]
+    assert [len(s) for s in result.segments] == [n] * 4
+    zs, azs = smooth(result)
+    for k in range(4 * n):
+        assert error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), truth[k]) < 1.0, k
+    # A clip that only goes forward is not cut, whatever its pace.
+    steady = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(2 * n)]
+    assert run(world, [draw(world, d, k) for k, d in enumerate(steady)], None,
+               trimmed_circle.fit_trimmed).jumps == []
