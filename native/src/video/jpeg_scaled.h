@@ -32,9 +32,10 @@ int JpegShrinkFor(cv::Size full, cv::Size size);
 // 8-bit BGR of `size` from a JPEG's Y, Cb and Cr planes (cb, cr empty for
 // a gray JPEG), each area-averaged to `size` first and then converted as
 // JPEG's YCbCr (cv::COLOR_YCrCb2BGR): averaging before the linear
-// conversion differs only where a channel clips. Subsampled chroma planes
-// are stretched over the image (half a camera pixel off at an odd side):
-// colour for a background, not a measurement.
+// conversion differs only where a channel clips. Planes are stretched over
+// `size` as they come (subsampled chroma half a camera pixel off at an odd
+// side; scaled planes' last block part padding): colour for a background,
+// not a measurement.
 cv::Mat BgrFromPlanes(const cv::Mat& y, const cv::Mat& cb, const cv::Mat& cr,
                       cv::Size size);
 

@@ -500,14 +500,17 @@ bool VideoReader::ReadScaledJpeg(const std::string& file, const Wanted& want) {
     return out.data == plane.data ? out.clone() : out;
   };
   if (want.bgr) {
-    // Gray and colour from one decode of the planes, at a scaling both
-    // sizes allow (the smaller of the two powers of two).
-    const int bgr_shrink = JpegShrinkFor(full, want.bgr_size);
+    // Gray and colour from one decode of the planes, at the gray's scaling.
+    // The colour is the unmodelled-shadow note's background, compared with
+    // a frame's point samples a pixel of shake apart: where a colour
+    // pixel's border cuts a block it may take the block's mean, as long as
+    // its pixels are no smaller than the blocks.
+    int shrink = want.gray ? gray_shrink : 8;
+    while (shrink > 1 && (width_ < want.bgr_size.width * shrink ||
+                          height_ < want.bgr_size.height * shrink))
+      shrink /= 2;
     cv::Mat y, cb, cr;
-    if (!jpeg_->Planes(
-            want.gray ? std::min(gray_shrink, bgr_shrink) : bgr_shrink, &y, &cb,
-            &cr))
-      return false;
+    if (!jpeg_->Planes(shrink, &y, &cb, &cr)) return false;
     if (want.gray) *want.gray = reduced(y, want.gray_size);
     *want.bgr = BgrFromPlanes(y, cb, cr, want.bgr_size);
   } else {

@@ -87,8 +87,9 @@ class VideoReader {
   // Both from the same frame: gray as ReadGray, and 8-bit BGR scaled to
   // `bgr_size` (empty: as decoded) by the colour conversion itself, cheaper
   // than converting the whole frame (4K: a fraction of the 8 Mpixel BGR).
-  // A sequence's JPEG images, when both sizes reduce: both by TurboJPEG as
-  // above (two decodes, the colour as libjpeg converts it).
+  // A sequence's JPEG images, when both sizes reduce: both from one
+  // TurboJPEG decode of the Y, Cb, Cr planes at the gray's scaling (the
+  // colour, a background, within a block's mean of its geometry).
   bool ReadGrayAndBgr(cv::Mat* gray, cv::Size gray_size, cv::Mat* bgr,
                       cv::Size bgr_size);
   // What the last Read() returned.
