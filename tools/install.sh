@@ -11,7 +11,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libopencv-dev libeigen3-dev libceres-dev libembree-dev libtbb-dev
   liberfa-dev pybind11-dev libgtest-dev libgmock-dev
-  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev
+  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev libturbojpeg0-dev
   patchelf debootstrap nasm unzip ccache
   python3-dev python3-numpy python3-pytest python3-matplotlib python3-hypothesis python3-pil
   blender ffmpeg xvfb xauth

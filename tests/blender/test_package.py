@@ -56,6 +56,7 @@ def test_packaged_module_needs_only_system_basics_from_the_machine(packages, tmp
     assert any(n.endswith(".dist-info/RECORD") for n in names)
     libs = [n for n in names if n.startswith("sunlapse_native/libs/")]
     assert any("libembree3" in n for n in libs) and any("libopencv_core" in n for n in libs)
+    assert any("libturbojpeg" in n for n in libs)  # JPEG stills (video stage)
     # ldd with no library path: everything else resolves inside the package.
     package.check_self_contained(str(tmp_path / "wheel" / "sunlapse_native"))
     for name, path in package.ldd(str(tmp_path / "wheel" / "sunlapse_native" /

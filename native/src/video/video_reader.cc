@@ -1,15 +1,19 @@
 #include "sunlapse/video/video_reader.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
+
+#include "jpeg_scaled.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -260,6 +264,14 @@ std::string DecodeImage(const std::string& path, cv::Mat* bgr,
   return error;
 }
 
+// A name FFmpeg's image reader takes for a JPEG (it goes by the name too).
+bool HasJpegName(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext == ".jpg" || ext == ".jpeg" || ext == ".jpe" || ext == ".jfif";
+}
+
 }  // namespace
 
 struct VideoReader::Movie {
@@ -305,7 +317,21 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
     sequence_ = *sequence;
     num_frames_ = sequence_.num_frames();
     num_frames_exact_ = true;
+    fps_ = 0.0;
+    // A JPEG's size from decoding it at an eighth (every decoding thread of
+    // a stream opens the clip, and a 24 MP still decoded whole in colour
+    // costs a quarter of a second); else, or when TurboJPEG refuses it,
+    // FFmpeg's.
     cv::Mat first;
+    if (HasJpegName(path)) {
+      jpeg_ = std::make_unique<ScaledJpeg>();
+      if (jpeg_->Open(path, kMaxFramePixels).empty() &&
+          jpeg_->Gray(8) != nullptr) {
+        width_ = jpeg_->width();
+        height_ = jpeg_->height();
+        return;
+      }
+    }
     const std::string error = DecodeImage(path, &first);
     if (!error.empty()) {
       throw std::invalid_argument("path: cannot decode image " + path + " (" +
@@ -313,7 +339,6 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
     }
     width_ = first.cols;
     height_ = first.rows;
-    fps_ = 0.0;
     return;
   }
   movie_ = std::make_unique<Movie>();
@@ -425,6 +450,7 @@ bool VideoReader::ReadSequence(const Wanted& want) {
     last_.message = "no file " + file;
     return true;
   }
+  if (ReadScaledJpeg(file, want)) return true;
   const std::string error = DecodeImage(file, want.bgr, want.gray);
   if (!error.empty()) {
     last_.status = FrameStatus::kUndecodable;
@@ -445,6 +471,55 @@ bool VideoReader::ReadSequence(const Wanted& want) {
   }
   if (want.gray) *want.gray = AreaReduced(*want.gray, want.gray_size);
   if (want.bgr) *want.bgr = AreaReduced(*want.bgr, want.bgr_size);
+  return true;
+}
+
+bool VideoReader::ReadScaledJpeg(const std::string& file, const Wanted& want) {
+  // Only reads that reduce every output: the whole picture keeps FFmpeg's
+  // (colour at its own size: tracks read through OpenCV match it).
+  const cv::Size full(width_, height_);
+  auto reduces = [&](const cv::Mat* out, cv::Size size) {
+    return out == nullptr || (!size.empty() && size != full);
+  };
+  if (!reduces(want.gray, want.gray_size) ||
+      !reduces(want.bgr, want.bgr_size) || !HasJpegName(file))
+    return false;
+  if (!jpeg_) jpeg_ = std::make_unique<ScaledJpeg>();
+  // Another size than the clip's: FFmpeg's read reports it as always.
+  if (!jpeg_->Open(file, kMaxFramePixels).empty() || jpeg_->width() != width_ ||
+      jpeg_->height() != height_)
+    return false;
+  // At the largest scaling that keeps the reduction's geometry; even
+  // whole, TurboJPEG's luma alone costs two thirds of FFmpeg's decode.
+  // JPEG's Y is BT.601's full-range luma: what FFmpeg's decoder gave as
+  // gray (ToGrayFromLuma) and what cv::COLOR_BGR2GRAY weighs.
+  const int gray_shrink = JpegShrinkFor(full, want.gray_size);
+  // The decoder's buffer is reused: an output of its very size is copied.
+  auto reduced = [](const cv::Mat& plane, cv::Size size) {
+    cv::Mat out = AreaReduced(plane, size);
+    return out.data == plane.data ? out.clone() : out;
+  };
+  if (want.bgr) {
+    // Gray and colour from one decode of the planes, at the gray's scaling.
+    // The colour is the unmodelled-shadow note's background, compared with
+    // a frame's point samples a pixel of shake apart: where a colour
+    // pixel's border cuts a block it may take the block's mean, as long as
+    // its pixels are no smaller than the blocks.
+    int shrink = want.gray ? gray_shrink : 8;
+    while (shrink > 1 && (width_ < want.bgr_size.width * shrink ||
+                          height_ < want.bgr_size.height * shrink))
+      shrink /= 2;
+    cv::Mat y, cb, cr;
+    if (!jpeg_->Planes(shrink, &y, &cb, &cr)) return false;
+    if (want.gray) *want.gray = reduced(y, want.gray_size);
+    *want.bgr = BgrFromPlanes(y, cb, cr, want.bgr_size);
+  } else {
+    const cv::Mat* y = jpeg_->Gray(gray_shrink);
+    if (y == nullptr) return false;
+    *want.gray = reduced(*y, want.gray_size);
+  }
+  last_.width = width_;
+  last_.height = height_;
   return true;
 }
 

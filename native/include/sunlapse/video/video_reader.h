@@ -14,6 +14,8 @@
 
 namespace sunlapse {
 
+class ScaledJpeg;
+
 // The display gamma footage is encoded with (sRGB's, about 2.2): the
 // estimate's shading model is linear, so 8-bit values are raised to it.
 inline constexpr double kDisplayGamma = 2.2;
@@ -75,11 +77,19 @@ class VideoReader {
   // The same as 8-bit gray: the luma as decoded (no colour conversion, video
   // range expanded to 0-255), cheaper than BGR when colour is not needed.
   // `size`, when not empty, reduces the frame to it by area averaging
-  // (AreaReduced), straight from the decoder's picture.
+  // (AreaReduced), straight from the decoder's picture. A sequence's JPEG
+  // images are then decoded by TurboJPEG, luma only, at 1/2, 1/4 or 1/8 of
+  // their size when every pixel of `size` covers whole blocks of that many
+  // (the scaled inverse DCT's block means: the same average), else whole;
+  // anything TurboJPEG refuses is decoded by FFmpeg (JpegShrinkFor in
+  // jpeg_scaled.h).
   bool ReadGray(cv::Mat* gray, cv::Size size = cv::Size());
   // Both from the same frame: gray as ReadGray, and 8-bit BGR scaled to
   // `bgr_size` (empty: as decoded) by the colour conversion itself, cheaper
   // than converting the whole frame (4K: a fraction of the 8 Mpixel BGR).
+  // A sequence's JPEG images, when both sizes reduce: both from one
+  // TurboJPEG decode of the Y, Cb, Cr planes at the gray's scaling (the
+  // colour, a background, within a block's mean of its geometry).
   bool ReadGrayAndBgr(cv::Mat* gray, cv::Size gray_size, cv::Mat* bgr,
                       cv::Size bgr_size);
   // What the last Read() returned.
@@ -106,9 +116,14 @@ class VideoReader {
   };
   bool SeekFar(int index);  // a movie's seek through its key frame
   bool ReadSequence(const Wanted& want);
+  // `file` (a sequence's image) as `want` asks, decoded scaled by
+  // TurboJPEG; false when it was not (no size that gains, not a JPEG, one
+  // TurboJPEG refuses, another size than the clip's: FFmpeg reads it then).
+  bool ReadScaledJpeg(const std::string& file, const Wanted& want);
   bool ReadMovie(const Wanted& want);
 
   std::unique_ptr<Movie> movie_;
+  std::unique_ptr<ScaledJpeg> jpeg_;  // made at a sequence's first JPEG read
   std::string path_;
   bool is_sequence_ = false;
   ImageSequence sequence_;  // when is_sequence_
