@@ -140,6 +140,16 @@ def suns_of(spec, sun_position):
             for t in frame_times_local(spec)]
 
 
+def _draw_day(rng, latitudes):
+    """A place (latitude in `latitudes`, any longitude), its whole-hour UTC
+    offset and zone, and a day of 2025."""
+    lat = rng.uniform(*latitudes)
+    lon = rng.uniform(-180.0, 180.0)
+    utc = max(-12, min(14, round(lon / 15.0)))
+    day = dt.date(2025, 1, 1) + dt.timedelta(days=rng.randrange(365))
+    return lat, lon, utc, day, dt.timezone(dt.timedelta(hours=utc))
+
+
 def _crossing(sun_position, lat, lon, t0, t1, zenith_deg):
     """The time between t0 and t1 (either order) when the Sun's zenith
     crosses zenith_deg (it must cross once), to the second."""
@@ -160,11 +170,7 @@ def _draw_twilight_time(rng, sun_position, frames):
     sunset and ends with the Sun TWILIGHT_DEPTH_DEG below the horizon (or
     mirrored about sunrise), its Sun within the suite's bounds while up."""
     for _ in range(400):
-        lat = rng.uniform(-55.0, 60.0)
-        lon = rng.uniform(-180.0, 180.0)
-        utc = max(-12, min(14, round(lon / 15.0)))
-        day = dt.date(2025, 1, 1) + dt.timedelta(days=rng.randrange(365))
-        tz = dt.timezone(dt.timedelta(hours=utc))
+        lat, lon, utc, day, tz = _draw_day(rng, (-55.0, 60.0))
         noon = dt.datetime(day.year, day.month, day.day, 12, tzinfo=tz) - \
             dt.timedelta(hours=lon / 15.0 - utc)   # about the Sun's transit
         dusk = rng.random() < 0.5
@@ -203,11 +209,7 @@ def _draw_time(rng, sun_position, frames, hours_range, ok):
     """A place, a date and a window of `hours_range` hours whose Sun stays
     below MAX_ZENITH_DEG and satisfies ok(suns_world_fn)."""
     for _ in range(400):
-        lat = rng.uniform(-60.0, 65.0)
-        lon = rng.uniform(-180.0, 180.0)
-        utc = max(-12, min(14, round(lon / 15.0)))
-        day = dt.date(2025, 1, 1) + dt.timedelta(days=rng.randrange(365))
-        tz = dt.timezone(dt.timedelta(hours=utc))
+        lat, lon, utc, day, tz = _draw_day(rng, (-60.0, 65.0))
         midnight = dt.datetime(day.year, day.month, day.day, tzinfo=tz)
         # Daylight with a Sun high enough, sampled every 10 minutes.
         good = [m for m in range(0, 24 * 60, 10)

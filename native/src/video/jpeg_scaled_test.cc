@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -16,29 +15,13 @@
 
 #include "sunlapse/video/frame_stream.h"
 #include "sunlapse/video/video_reader.h"
+#include "temp_dir.h"
 
 namespace sunlapse {
 namespace {
 namespace fs = std::filesystem;
 
-struct TempDirs {
-  std::vector<fs::path> made;
-  ~TempDirs() {
-    std::error_code ignored;
-    for (const fs::path& d : made) fs::remove_all(d, ignored);
-  }
-};
-TempDirs temp_dirs;
-
-fs::path TempDir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() /
-      ("sunlapse_jpeg_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  temp_dirs.made.push_back(d);
-  return d;
-}
+using testing::TempDir;
 
 // Grain over a colour gradient, as a camera's still has.
 cv::Mat Still(int width, int height, int seed) {
@@ -156,7 +139,7 @@ TEST(ScaledJpeg, IsTheWholeDecodeAreaReducedWithinJpegRounding) {
   // whole transform's outputs before rounding to 8 bits (jidctred.c), and
   // its whole IDCT rounds otherwise than FFmpeg's: a level or two apart,
   // on sides that are and are not multiples of the blocks.
-  const fs::path d = TempDir("within");
+  const fs::path d = TempDir("jpeg_within");
   for (const Case& c : kCases) {
     const std::string path = Jpegs(d, "s" + std::to_string(c.full.width),
                                    Still(c.full.width, c.full.height, 7));
@@ -176,7 +159,7 @@ TEST(ScaledJpeg, IsTheWholeDecodeAreaReducedWithinJpegRounding) {
 TEST(ScaledJpeg, KeepsTheGeometryToThePixel) {
   // Stripes that are no multiple of a block: the scaled read must match
   // the whole decode reduced, and the same reduced one pixel off must not.
-  const fs::path d = TempDir("geometry");
+  const fs::path d = TempDir("jpeg_geometry");
   for (const Case& c : kCases) {
     const std::string path = Jpegs(d, "g" + std::to_string(c.full.width),
                                    Stripes(c.full.width, c.full.height),
@@ -209,7 +192,7 @@ TEST(ScaledJpeg, BlockMeansCannotKeepAnOutputBorderInsideABlock) {
   // Why JpegShrinkFor decodes 6530 x 3674 whole for 816 x 459: from the
   // eighth-size picture, whatever the weights, an output pixel whose
   // border cuts a block gets that block's mean, not its part's.
-  const fs::path d = TempDir("cut");
+  const fs::path d = TempDir("jpeg_cut");
   const std::string path =
       Jpegs(d, "c", Stripes(650, 490), {cv::IMWRITE_JPEG_QUALITY, 98});
   ScaledJpeg jpeg;
@@ -231,7 +214,7 @@ TEST(ScaledJpeg, GrayIsTheLumaFfmpegGivesAndBgrToGrayWeighs) {
   // JPEG's Y is 0.299 R + 0.587 G + 0.114 B (full range): what FFmpeg's
   // luma plane gave as gray, and what cv::COLOR_BGR2GRAY makes of the
   // colour FFmpeg decodes.
-  const fs::path d = TempDir("luma");
+  const fs::path d = TempDir("jpeg_luma");
   const std::string path = Jpegs(d, "y", Still(320, 240, 3));
   ScaledJpeg jpeg;
   ASSERT_EQ(jpeg.Open(path, VideoReader::kMaxFramePixels), "");
@@ -290,7 +273,7 @@ std::string CmykJpeg(const fs::path& d, int width, int height) {
 }
 
 TEST(ScaledJpeg, RefusesWhatItShouldNotDecode) {
-  const fs::path d = TempDir("refuses");
+  const fs::path d = TempDir("jpeg_refuses");
   ScaledJpeg jpeg;
   EXPECT_EQ(jpeg.Gray(8), nullptr);  // nothing opened
   std::ofstream(d / "text.jpg") << "not a jpeg";
@@ -324,7 +307,7 @@ TEST(ScaledJpeg, WhatTurboJpegRefusesReadsAsItAlwaysHas) {
   // Corrupt, truncated, CMYK, of another size: FFmpeg reads it whole, with
   // the same report (and picture) as before TurboJPEG; progressive JPEGs
   // TurboJPEG decodes itself.
-  const fs::path d = TempDir("fallback");
+  const fs::path d = TempDir("jpeg_fallback");
   const cv::Mat img = Still(650, 490, 5);
   const cv::Size size(162, 122);
   auto second = [&](const std::string& name) {
@@ -382,7 +365,7 @@ TEST(ScaledJpeg, AMovieThenAScaledStillInOneProcess) {
   // FFmpeg's lowres corrupted the heap on exactly this order (a movie read
   // as gray, then a 650 x 490 JPEG decoded scaled); run under valgrind or
   // ASan to see it clean.
-  const fs::path d = TempDir("movie_then_still");
+  const fs::path d = TempDir("jpeg_movie_then_still");
   const std::string movie = (d / "clip.avi").string();
   {
     cv::VideoWriter w(movie, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
@@ -409,7 +392,7 @@ TEST(ScaledJpeg, AMovieThenAScaledStillInOneProcess) {
 TEST(ScaledJpeg, ColourForTheNoteIsTheWholeColourReduced) {
   // The reference frames also come in colour (keep_bgr): two scaled
   // decodes, gray as ReadGray gives it, colour close to FFmpeg's reduced.
-  const fs::path d = TempDir("colour");
+  const fs::path d = TempDir("jpeg_colour");
   const std::string path = Jpegs(d, "c", Still(1001, 777, 4));
   const cv::Size gray_size(250, 194), bgr_size(91, 71);  // the note's stride 11
   VideoReader both(path), bgr_reader(path);
@@ -455,7 +438,7 @@ TEST(ScaledJpeg, ColourForTheNoteIsTheWholeColourReduced) {
 TEST(ScaledJpeg, StreamsInOrderOnEveryThreadWithTheSameReports) {
   // The stream's threads each decode scaled; a frame FFmpeg cannot decode
   // either reports as before.
-  const fs::path d = TempDir("stream");
+  const fs::path d = TempDir("jpeg_stream");
   for (int i = 1; i <= 9; ++i)
     cv::imwrite((d / ("IMG_" + std::to_string(i) + ".jpg")).string(),
                 Still(650, 490, i), {cv::IMWRITE_JPEG_QUALITY, 90});

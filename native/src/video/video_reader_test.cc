@@ -1,9 +1,9 @@
 #include "sunlapse/video/video_reader.h"
+#include "temp_dir.h"
 
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
-#include <unistd.h>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -19,24 +19,7 @@ namespace sunlapse {
 namespace {
 namespace fs = std::filesystem;
 
-// Folders made by the tests, removed when the test program ends.
-struct TempDirs {
-  std::vector<fs::path> made;
-  ~TempDirs() {
-    std::error_code ignored;
-    for (const fs::path& d : made) fs::remove_all(d, ignored);
-  }
-};
-TempDirs temp_dirs;
-
-fs::path TempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("sunlapse_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  temp_dirs.made.push_back(d);
-  return d;
-}
+using testing::TempDir;
 
 cv::Mat Frame(int i) {
   return cv::Mat(24, 32, CV_8UC3, cv::Scalar(10 * i, 20, 30));
