@@ -26,7 +26,9 @@ pass rate (mean <= 1 deg and max <= 3 deg in zenith and azimuth), the
 confidence calibration (frames with confidence >= 0.8 within 2 deg; frames
 more than 5 deg off at confidence >= 0.8), the time, and on frames with the
 Sun below the horizon how many the track flags without direct sunlight and
-the highest Sun it answers there. Figures only: the
+the highest Sun it answers there; then the reliability table (confidence in
+10 bins against the share of frames within 2 deg), its expected calibration
+error and the frames more than 5 deg off at confidence >= 0.5. Figures only: the
 exit code is 0 whatever the figures (non-zero only for bad flags).
 """
 import argparse
@@ -245,6 +247,9 @@ def summary(rows):
                  p["confidence"] >= CONFIDENT and p["error_deg"] is not None]
     times = [r["total_s"] for r in rows if r.get("total_s") is not None]
     night = [p for r in rows for p in r.get("night", [])]
+    scored = [(p["error_deg"], p["confidence"]) for p in frames
+              if p["error_deg"] is not None and p["confidence"] is not None]
+    bins, ece = evaluation.reliability(scored, CONFIDENT_WITHIN_DEG)
     return {
         "scenes": len(rows),
         "passed": sum(r["passed"] for r in rows),
@@ -255,6 +260,9 @@ def summary(rows):
         "confident_within_2deg": (sum(p["error_deg"] <= CONFIDENT_WITHIN_DEG for p in confident)
                                   / len(confident)) if confident else None,
         "confident_over_5deg": sum(p["error_deg"] > CONFIDENT_WRONG_DEG for p in confident),
+        "over_5deg_at_half": sum(e > CONFIDENT_WRONG_DEG and c >= 0.5 for e, c in scored),
+        "reliability": [dataclasses.asdict(b) for b in bins],
+        "calibration_error": ece,
         "night_frames": len(night),
         "night_flagged": sum(p["sunlight"] == "no" for p in night),
         "night_max_altitude_deg": max((90.0 - p["zenith_deg"] for p in night
@@ -264,6 +272,19 @@ def summary(rows):
         "total_s_sum": sum(times) if times else None,
         "failed_runs": [r["scene"] for r in rows if r.get("error")],
     }
+
+
+def print_reliability(s):
+    """Confidence against the share of frames within 2 deg, 10 bins."""
+    print(f"reliability (frames within {CONFIDENT_WITHIN_DEG:g} deg by confidence; a frame at "
+          f"confidence c should be within with probability c):")
+    for b in s["reliability"]:
+        print(f"  {b['lo']:.1f}-{b['hi']:.1f}: {b['frames']:5d} frames, mean confidence "
+              f"{b['mean_confidence']:.2f}, within {b['share_within']:.2f}")
+    ece = s["calibration_error"]
+    print(f"  expected calibration error {'-' if ece is None else f'{ece:.3f}'} (target <= 0.05); "
+          f"{s['over_5deg_at_half']} frames more than {CONFIDENT_WRONG_DEG:g} deg off at "
+          f"confidence >= 0.5 (target 0)")
 
 
 def print_summary(s, smoothing):
@@ -376,6 +397,7 @@ def main(argv=None):
         print_rows(rows, smoothing)
         s = summary(rows)
         print_summary(s, smoothing)
+        print_reliability(s)
         figures["smoothings"][smoothing] = {"summary": s, "scenes": rows}
     print(f"\nsuite: {len(keys)} scenes x {len(smoothings)} smoothing(s) in "
           f"{time.perf_counter() - t_all:.0f} s; tracks and logs in {work}")

@@ -99,6 +99,38 @@ def evaluate(name: str, track: Optional[Track], truth: Track,
     return report
 
 
+@dataclass
+class ReliabilityBin:
+    """Frames whose confidence lies in [lo, hi): how many, their mean
+    confidence, and the share of them within the reliability's limit."""
+    lo: float
+    hi: float
+    frames: int
+    mean_confidence: float
+    share_within: float
+
+
+def reliability(frames: Sequence[Tuple[float, float]], within_deg: float = 2.0,
+                bins: int = 10) -> Tuple[List[ReliabilityBin], Optional[float]]:
+    """How far confidence is a probability: frames (error deg, confidence)
+    in `bins` equal bins of confidence (1.0 in the last), each bin's share of
+    frames within `within_deg`, and the expected calibration error (the
+    frames' mean gap between confidence and that share; None without
+    frames). A frame at confidence c should be within with probability c."""
+    rows: List[ReliabilityBin] = []
+    gap = 0.0
+    for b in range(bins):
+        lo, hi = b / bins, (b + 1) / bins
+        inside = [(e, c) for e, c in frames if lo <= c < hi or (b == bins - 1 and c == hi)]
+        if not inside:
+            continue
+        mean_c = sum(c for _, c in inside) / len(inside)
+        share = sum(e <= within_deg for e, _ in inside) / len(inside)
+        rows.append(ReliabilityBin(lo, hi, len(inside), mean_c, share))
+        gap += len(inside) * abs(share - mean_c)
+    return rows, (gap / len(frames) if frames else None)
+
+
 def _fmt(v: Optional[float]) -> str:
     return "-" if v is None else f"{v:.2f}°"
 

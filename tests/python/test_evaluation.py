@@ -96,3 +96,16 @@ def test_angle_between_is_exact_for_tiny_angles_and_any_length():
     assert ev.angle_between_deg([2 * x for x in u], v) == pytest.approx(0.001, rel=1e-6)
     assert ev.angle_between_deg((1, 0, 0), (-1, 0, 0)) == pytest.approx(180.0)
     assert ev.angle_between_deg((1, 0, 0), (0, 3, 0)) == pytest.approx(90.0)
+
+
+def test_reliability_bins_confidence_against_the_share_within():
+    frames = [(0.5, 0.95)] * 9 + [(6.0, 0.95)] + [(0.5, 0.15)] * 2 + [(3.0, 0.15)] * 8 \
+        + [(0.1, 1.0)]
+    rows, ece = ev.reliability(frames, within_deg=2.0)
+    assert [(r.lo, r.frames) for r in rows] == [(0.1, 10), (0.9, 11)]
+    low, high = rows
+    assert low.share_within == pytest.approx(0.2) and low.mean_confidence == pytest.approx(0.15)
+    assert high.share_within == pytest.approx(10 / 11)
+    gap = 10 * 0.05 + 11 * abs(10 / 11 - (0.95 * 10 + 1.0) / 11)
+    assert ece == pytest.approx(gap / 21)
+    assert ev.reliability([]) == ([], None)
