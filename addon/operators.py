@@ -33,6 +33,8 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             t2 = time.perf_counter()
             ground = job.ground_names(settings, model) or gather.guess_ground(model, cam)
             unseen = job.view_doubts(model, cam, scene_n, camera_n, ground)
+            moved = gather.camera_motion(context, settings.camera or context.scene.camera,
+                                         (clip.frame_start, clip.frame_end))
         except (gather.SceneError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -47,6 +49,9 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
         doubts = unseen + gather.ground_doubts(model, ground) if ground else [
             "No ground in view: model the surface the shadows fall on (a plane under the "
             "objects) and pick it as Ground"]
+        if moved is not None:
+            doubts.append(f"the camera moves over the clip ({moved}): Estimate Sun needs a "
+                          f"camera that stays put (set a Frame Range where it does)")
         if doubts:
             # A lone object (the default cube) casts its shadow on nothing
             # modelled: its own top was taken for the ground.

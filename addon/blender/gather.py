@@ -307,6 +307,58 @@ def gather_camera(context, camera_obj=None, clip: Optional[ClipInfo] = None,
                       warnings=warnings)
 
 
+# A camera moving more than this over the frames is a moving camera (a
+# camera solve's jitter is a few mm and hundredths of a degree); sampled on
+# at most CAMERA_MOTION_SAMPLES frames.
+CAMERA_MOVE_M = 0.02
+CAMERA_TURN_DEG = 0.2
+CAMERA_LENS_SHARE = 0.005
+CAMERA_MOTION_SAMPLES = 24
+
+
+def _animated(obj) -> bool:
+    """Whether anything could move the camera: keys, drivers or constraints
+    on it or a parent, or keys on its lens."""
+    while obj is not None:
+        if obj.animation_data is not None or len(obj.constraints) > 0:
+            return True
+        obj = obj.parent
+    return False
+
+
+def camera_motion(context, obj, frames) -> Optional[str]:
+    """How far the camera moves over the frames (first, last), in words, or
+    None when it stays put: evaluated (keys, constraints, parents, a
+    camera solve) on frames spread over them; the current frame is put back."""
+    if obj is None or obj.type != "CAMERA" or not (
+            _animated(obj) or obj.data.animation_data is not None):
+        return None
+    scene = context.scene
+    now = scene.frame_current
+    lo, hi = frames
+    count = min(CAMERA_MOTION_SAMPLES, hi - lo + 1)
+    sampled = sorted({lo + round(i * (hi - lo) / max(1, count - 1)) for i in range(count)})
+    poses = []
+    try:
+        for f in sampled:
+            scene.frame_set(f)
+            depsgraph = context.evaluated_depsgraph_get()
+            m = np.array(obj.evaluated_get(depsgraph).matrix_world, dtype=np.float64)
+            poses.append((f, m[:3, 3].copy(), m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0),
+                          float(obj.data.lens)))
+    finally:
+        scene.frame_set(now)
+    f0, t0, r0, lens0 = poses[0]
+    move = max(float(np.linalg.norm(t - t0)) for _, t, _, _ in poses)
+    turn = max(float(np.degrees(np.arccos(np.clip((np.trace(r0.T @ r) - 1.0) / 2.0, -1, 1))))
+               for _, _, r, _ in poses)
+    zoom = max(abs(lens / lens0 - 1.0) for _, _, _, lens in poses)
+    if move <= CAMERA_MOVE_M and turn <= CAMERA_TURN_DEG and zoom <= CAMERA_LENS_SHARE:
+        return None
+    return (f"up to {move:.2f} m and {turn:.1f} deg from frame {f0}"
+            + (f", its lens by {100 * zoom:.1f}%" if zoom > CAMERA_LENS_SHARE else ""))
+
+
 def _clip_distortion(movieclip, warnings) -> Optional[dict]:
     """The clip's tracking-camera lens distortion, when the user set one."""
     tc = movieclip.tracking.camera

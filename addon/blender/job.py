@@ -121,6 +121,12 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
                       min(clip.frame_end, settings.frame_end))
     if frames[0] > frames[1]:
         raise gather.SceneError(f"empty frame range {frames[0]}-{frames[1]}")
+    moved = gather.camera_motion(context, settings.camera or context.scene.camera, frames)
+    if moved is not None:
+        raise gather.SceneError(
+            f"The camera '{cam.name}' moves over frames {frames[0]}-{frames[1]} ({moved}): "
+            f"sunlapse estimates the Sun for a camera that stays put. Estimate a part of "
+            f"the clip where it does not move (Frame Range, --frames), or key it still")
     options = EstimateOptions(
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
