@@ -394,7 +394,8 @@ def _run(argv, interrupt):
           f"(tracking {timing.get('tracking_ms_per_frame', 0):.1f} ms/frame)")
     dark = track.without_sunlight()
     if dark:
-        predicted = sum(f.predicted for f in track.frames if f.frame in set(dark))
+        dark_set = set(dark)
+        predicted = sum(f.predicted for f in track.frames if f.frame in dark_set)
         print(f"sunlapse: no direct sunlight on {len(dark)} frame(s) "
               f"({trackfile.frame_ranges(dark)}): {predicted} of them have their Sun "
               f"predicted from the path, at confidence 0")

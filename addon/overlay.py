@@ -87,16 +87,11 @@ def plot_layout(track, frame, x0, y0, w, h, size=11.0, text_width=_text_width):
     conf = [(x0 + w * (f.frame - f0) / span, sy + strip_h * max(0.0, min(1.0, f.confidence)))
             for f in track.frames]
     strips.append(("Confidence (0-1)", CONFIDENCE_COLOR, (0.0, 1.0), conf, sy, strip_h))
-    # Runs of frames without direct sunlight, shaded across the strips.
-    unlit, x_of = [], (lambda f: x0 + w * (f - f0) / span)
-    for f in track.frames:
-        if f.sunlight != trackfile.Sunlight.NO:
-            continue
-        half = 0.5 * w / span
-        if unlit and f.frame - unlit[-1][2] == 1:
-            unlit[-1] = (unlit[-1][0], x_of(f.frame) + half, f.frame)
-        else:
-            unlit.append((x_of(f.frame) - half, x_of(f.frame) + half, f.frame))
+    # Runs of frames without direct sunlight, shaded across the strips
+    # (half a frame's width past either end).
+    half = 0.5 * w / span
+    unlit = [(x0 + w * (a - f0) / span - half, x0 + w * (b - f0) / span + half)
+             for a, b in trackfile.frame_runs(track.without_sunlight())]
     cur = track.frame(frame)
     values = None
     if cur is not None and cur.has_estimate:
@@ -114,7 +109,7 @@ def plot_layout(track, frame, x0, y0, w, h, size=11.0, text_width=_text_width):
         labels.append((text, x0, y0 + h + 0.6 * size))
     return {"strips": strips, "marker_x": x0 + w * (min(max(frame, f0), f1) - f0) / span,
             "frames": (f0, f1), "values": values, "labels": labels, "box": (x0, y0, w, h),
-            "unlit": [(a, b) for a, b, _ in unlit]}
+            "unlit": unlit}
 
 
 def _draw_plot(track, frame, region, shader, batch_for_shader, blf, gpu):

@@ -178,15 +178,20 @@ class Track:
         return self.north_source() != NorthSource.UNKNOWN
 
 
-def frame_ranges(frames: List[int]) -> str:
-    """Frame numbers as runs, for messages: "1-5, 9, 57-61"."""
+def frame_runs(frames: List[int]) -> List[Tuple[int, int]]:
+    """Frame numbers as runs of consecutive frames: [(first, last), ...]."""
     runs: List[List[int]] = []
     for f in sorted(set(frames)):
         if runs and f == runs[-1][1] + 1:
             runs[-1][1] = f
         else:
             runs.append([f, f])
-    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
+    return [(a, b) for a, b in runs]
+
+
+def frame_ranges(frames: List[int]) -> str:
+    """Frame numbers as runs, for messages: "1-5, 9, 57-61"."""
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in frame_runs(frames))
 
 
 def _num(value: Any) -> Optional[float]:

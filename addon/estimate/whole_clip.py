@@ -356,7 +356,8 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
             continue  # not one steady motion on both sides (or none)
         along = mb + ma
         along /= np.linalg.norm(along)
-        behind = -math.degrees(float(np.dot(middle(after) - middle(before), along)))
+        there = middle(after)
+        behind = -math.degrees(float(np.dot(there - middle(before), along)))
         # Low Suns' raw zeniths scatter by up to 10 deg along their long
         # shadows: going back must stand out of the frames' own scatter
         # (each frame off the middle of its neighbours: steady motion is no
@@ -366,7 +367,6 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
         limit = max(LOOP_BACK_DEG, LOOP_SCATTER_TIMES * scatter)
         # ... back onto the path it travelled (a run of frames misled the
         # same way looks like a jump, but leads nowhere the Sun has been).
-        there = middle(after)
         if behind > limit and any(_angle_deg(sun[k], there) <= limit
                                   for k in seen[first_of[i - g]:i - g]):
             back[i] = behind
@@ -472,11 +472,11 @@ class _WholeClip:
         self.result.tracker_pixel_scale = camera.width / self.work.width
         # Segments the caller knows of: capture times going back.
         self.starts = [0] * self.n
-        self.known_starts = self.starts  # the caller's (times going back)
         if times_s is not None:
             for k in range(1, self.n):
                 if times_s[k] < times_s[k - 1]:
                     self.starts[k] = 1
+        # The caller's starts; self.starts also gets the loops found (run()).
         self.known_starts = list(self.starts)
         # A refined Sun further than steer_deg from the path's direction is
         # not believed (the tracker locked onto something else): the pass's
@@ -509,7 +509,8 @@ class _WholeClip:
              for r in self.result.frames], self.starts)
         if any(ignored) or cuts:
             self.ignored = ignored
-            self.starts = [1 if k in cuts else s for k, s in enumerate(self.starts)]
+            for k in cuts:
+                self.starts[k] = 1
             if not self.path_and_check():
                 return self.result
             self.mark("dark_again")
@@ -645,7 +646,7 @@ class _WholeClip:
         self.bounds = _without_dark_segments(
             [0] + [k for k in range(1, n) if path.jump_before[k]] + [n],
             path.measured, self.starts)
-        self.result.jumps = [frames[k] for k in self.bounds[1:-1] if not self.known_starts[k]]
+        self.result.jumps = self.unexplained_jumps()
         d = self.directions
         self.result.evidence = {
             "explained": [round(v, 3) for v in path.explained],
@@ -734,8 +735,7 @@ class _WholeClip:
                           for k, r in enumerate(frames)], self.starts)
         if bounds != self.bounds:
             self.bounds = bounds
-            self.result.jumps = [self.frames[k] for k in bounds[1:-1]
-                                 if not self.known_starts[k]]
+            self.result.jumps = self.unexplained_jumps()
             self.result.segments = [self.frames[lo:hi] for lo, hi in zip(bounds, bounds[1:])]
             for s, (lo, hi) in enumerate(zip(bounds, bounds[1:])):
                 for r in frames[lo:hi]:
@@ -766,6 +766,10 @@ class _WholeClip:
                 self.unlit(r, "the shadows on this frame are not where the Sun's path puts "
                               "them")
         self.anchor_in_sunlight()
+
+    def unexplained_jumps(self) -> List[int]:
+        """Frames after a segment bound the caller's times do not explain."""
+        return [self.frames[k] for k in self.bounds[1:-1] if not self.known_starts[k]]
 
     def anchor_in_sunlight(self) -> None:
         """The best-supported frame among those with direct sunlight."""
