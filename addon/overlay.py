@@ -88,9 +88,10 @@ def plot_layout(track, frame, x0, y0, w, h, size=11.0, text_width=_text_width):
             for f in track.frames]
     strips.append(("Confidence (0-1)", CONFIDENCE_COLOR, (0.0, 1.0), conf, sy, strip_h))
     # Runs of frames without direct sunlight, shaded across the strips
-    # (half a frame's width past either end).
+    # (half a frame's width past either end, within the plot).
     half = 0.5 * w / span
-    unlit = [(x0 + w * (a - f0) / span - half, x0 + w * (b - f0) / span + half)
+    unlit = [(max(x0, x0 + w * (a - f0) / span - half),
+              min(x0 + w, x0 + w * (b - f0) / span + half))
              for a, b in trackfile.frame_runs(track.without_sunlight())]
     cur = track.frame(frame)
     values = None

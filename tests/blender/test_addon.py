@@ -276,7 +276,7 @@ def test_the_plot_shades_the_frames_without_sunlight_and_says_predicted():
     step = w / 13
     assert [(round(a, 3), round(b, 3)) for a, b in plot["unlit"]] == [
         (round(x0 + 2.5 * step, 3), round(x0 + 3.5 * step, 3)),
-        (round(x0 + 9.5 * step, 3), round(x0 + 13.5 * step, 3))]
+        (round(x0 + 9.5 * step, 3), round(x0 + w, 3))]  # not past the plot's end
     assert plot["labels"][2][0].endswith("(predicted: no sunlight)")
     assert "predicted" not in overlay.plot_layout(track, 2, x0, 30, w, 190, 11)["labels"][2][0]
 
