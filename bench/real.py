@@ -1,6 +1,7 @@
-"""Scores sunlapse on the real Marseille sundial clips against the ephemeris.
+"""Scores sunlapse on the real clips (the Marseille sundial, AMOS webcams) against the ephemeris.
 
   /usr/bin/python3 bench/real.py [--out DIR] [--methods default thesis] [--footage DIR]
+      [--clips CLIP ...] [--amos-footage DIR]
 
 For each clip it runs the scripted estimate (examples/run_estimate.py,
 exactly as a user would) on examples/real/<clip>.blend, builds the truth from
@@ -11,10 +12,19 @@ capture is scored once, on its first frame. Rows "(confident)" leave out
 frames whose track confidence is below 0.5 (the track marks them). The
 footage is read from ../shared/real/marseille-sundial beside the work tree
 (the .blend files point there); a missing folder skips the run with a note.
+
+The AMOS webcam clips (amos-mulhouse; footage in ../shared/real/amos, filled
+by examples/real/amos_fetch.py; a missing folder skips them with a note) have
+one capture per frame with UTC stamps (utc_time); they are scored on the
+frames where the Sun is at least 4 deg up. Their north is not known, so
+their azimuths are scored after removing one constant offset per run (the
+circular median of truth minus estimate, printed in the row name). A line per
+run lists how the frames with the Sun below the horizon were flagged.
 """
 import argparse
 import csv
 import datetime as dt
+import math
 import os
 import subprocess
 import sys
@@ -24,25 +34,89 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 
 from core import evaluation, trackfile  # noqa: E402
 
-LAT, LON, UTC_OFFSET = 43.3, 5.4, 1.0
-CLIPS = ("marseille-2005-01-13", "marseille-2005-03-21")
+# Per clip: its footage family (the --footage / --amos-footage folder), the
+# short name of its rows, the place, the times file's column and the offset of
+# its times from UTC, whether its north is known, and the lowest Sun scored.
+MARSEILLE = dict(footage="marseille", lat=43.3, lon=5.4, column="local_time", utc_offset=1.0,
+                 north_known=True, min_elevation=None)
+CLIP_SPECS = {
+    "marseille-2005-01-13": dict(MARSEILLE, short="2005-01-13"),
+    "marseille-2005-03-21": dict(MARSEILLE, short="2005-03-21"),
+    "amos-mulhouse": dict(footage="amos", short="mulhouse", lat=47.7467, lon=7.3386,
+                          column="utc_time", utc_offset=0.0, north_known=False,
+                          min_elevation=4.0),
+}
+CLIPS = tuple(CLIP_SPECS)
 CONFIDENT = 0.5
 
 
-def truth_track(times_csv, sun_position):
+def truth_track(times_csv, sun_position, spec=CLIP_SPECS["marseille-2005-01-13"]):
     """One truth frame per capture (the first frame showing each time stamp)."""
     seen, frames = set(), []
     with open(times_csv) as f:
         for row in csv.DictReader(f):
-            stamp = row["local_time"].strip()
+            stamp = row[spec["column"]].strip()
             if stamp in seen:
                 continue
             seen.add(stamp)
-            utc = dt.datetime.strptime(stamp, "%Y-%m-%d %H:%M") - dt.timedelta(hours=UTC_OFFSET)
-            z, a = sun_position(utc.year, utc.month, utc.day, utc.hour, utc.minute, 0.0, LAT, LON)
+            fmt = "%Y-%m-%d %H:%M:%S" if stamp.count(":") == 2 else "%Y-%m-%d %H:%M"
+            utc = dt.datetime.strptime(stamp, fmt) - dt.timedelta(hours=spec["utc_offset"])
+            z, a = sun_position(utc.year, utc.month, utc.day, utc.hour, utc.minute,
+                                float(utc.second), spec["lat"], spec["lon"])
             frames.append(trackfile.FrameEstimate(frame=int(row["frame"]), zenith_deg=z,
                                                   azimuth_deg=a, confidence=1.0))
     return trackfile.Track(frames=frames)
+
+
+def sun_up(truth, min_elevation):
+    """The truth frames with the Sun at least `min_elevation` deg up."""
+    out = trackfile.Track(north_offset_deg=truth.north_offset_deg)
+    out.frames = [f for f in truth.frames if 90.0 - f.zenith_deg >= min_elevation]
+    return out
+
+
+def azimuth_offset(track, truth):
+    """The circular median of truth minus estimate (deg) over the truth's
+    frames: the one rotation an unknown north leaves between them."""
+    est = {f.frame: f.azimuth_deg for f in track.frames if f.azimuth_deg is not None}
+    diffs = sorted(((t.azimuth_deg - est[t.frame] + 180.0) % 360.0) - 180.0
+                   for t in truth.frames if t.frame in est)
+    if not diffs:
+        return 0.0
+    # The median of the differences about their circular mean.
+    mean = math.degrees(math.atan2(sum(math.sin(math.radians(d)) for d in diffs),
+                                   sum(math.cos(math.radians(d)) for d in diffs)))
+    rel = sorted(((d - mean + 180.0) % 360.0) - 180.0 for d in diffs)
+    return mean + rel[len(rel) // 2]
+
+
+def rotated(track, offset):
+    out = trackfile.Track(north_offset_deg=0.0, initial=None, extra=track.extra)
+    out.frames = [trackfile.FrameEstimate(
+        frame=f.frame, zenith_deg=f.zenith_deg,
+        azimuth_deg=None if f.azimuth_deg is None else (f.azimuth_deg + offset) % 360.0,
+        confidence=f.confidence) for f in track.frames]
+    return out
+
+
+def sunlight_summary(track, truth):
+    """How the frames with the Sun below the horizon, and the frames flagged
+    without direct sunlight, came back."""
+    by = {f.frame: f for f in track.frames}
+    below = [t.frame for t in truth.frames if t.zenith_deg > 90.0]
+    parts = []
+    for n in below:
+        f = by.get(n)
+        state = "missing" if f is None else (
+            f"{f.sunlight.value if f.sunlight is not None else '-'}"
+            f"{', predicted' if f.predicted else ''}")
+        parts.append(f"{n} ({state})")
+    flags = {}
+    for f in track.frames:
+        if f.sunlight is not None and f.sunlight.value != "yes":
+            flags.setdefault(f.sunlight.value, []).append(f.frame)
+    return (f"Sun below the horizon: {', '.join(parts) or 'none'}; "
+            + "; ".join(f"sunlight {k}: {len(v)} frame(s) {v}" for k, v in sorted(flags.items())))
 
 
 def confident_only(track):
@@ -97,19 +171,31 @@ def main(argv=None):
     p.add_argument("--clips", nargs="+", default=list(CLIPS), choices=CLIPS)
     p.add_argument("--footage", default=os.path.join(os.path.dirname(ROOT), "shared", "real",
                                                      "marseille-sundial"))
+    p.add_argument("--amos-footage", default=os.path.join(os.path.dirname(ROOT), "shared", "real",
+                                                          "amos"))
     p.add_argument("--plots", action="store_true", help="write one PNG per clip and method")
     args = p.parse_args(argv)
-    if not os.path.isdir(args.footage):
-        print(f"real: no footage at {args.footage}: skipped")
+    folders = {"marseille": args.footage, "amos": args.amos_footage}
+    clips = []
+    for clip in args.clips:
+        folder = folders[CLIP_SPECS[clip]["footage"]]
+        if os.path.isdir(folder):
+            clips.append(clip)
+        else:
+            print(f"real: no footage at {folder}: {clip} skipped")
+    if not clips:
         return []
     import _native as native  # built by tools/install.sh into addon/
     os.makedirs(args.out, exist_ok=True)
-    reports = []
-    for clip in args.clips:
-        truth = truth_track(os.path.join(args.footage, f"{clip}.times.csv"), native.sun_position)
+    reports, notes = [], []
+    for clip in clips:
+        spec = CLIP_SPECS[clip]
+        folder = folders[spec["footage"]]
+        truth = truth_track(os.path.join(folder, f"{clip}.times.csv"), native.sun_position, spec)
+        scored = truth if spec["min_elevation"] is None else sun_up(truth, spec["min_elevation"])
         blend = os.path.join(ROOT, "examples", "real", f"{clip}.blend")
         for method in args.methods:
-            name = f"{clip[10:]}/{method}"
+            name = f"{spec['short']}/{method}"
             out_json = os.path.join(args.out, f"{clip}.{method}.sun.json")
             code = run_clip(blend, out_json, method, out_json + ".log")
             if code != 0 or not os.path.exists(out_json):
@@ -117,14 +203,23 @@ def main(argv=None):
                                                    message=f"run failed (see {out_json}.log)"))
                 continue
             track = trackfile.read_track(out_json)
-            for label, view in ((name + " raw", raw_view(track)),
-                                (name + " smoothed", geographic(track)),
-                                (name + " raw, confident", confident_only(raw_view(track)))):
-                r = evaluation.evaluate(label, view, truth)
+            views = [(name + " raw", raw_view(track)),
+                     (name + " smoothed", geographic(track)),
+                     (name + " raw, confident", confident_only(raw_view(track)))]
+            if not spec["north_known"]:
+                views = [(f"{label} (azimuth +{off:.1f})", rotated(view, off))
+                         for label, view in views
+                         for off in [azimuth_offset(view, scored)]]
+            if spec["min_elevation"] is not None and method != "thesis":
+                notes.append(f"{name}: {sunlight_summary(track, truth)}")
+            for label, view in views:
+                r = evaluation.evaluate(label, view, scored)
                 reports.append(r)
-                if args.plots and label.endswith("smoothed"):
+                if args.plots and " smoothed" in label:
                     evaluation.plot(r, os.path.join(args.out, f"{clip}.{method}.png"))
     print(evaluation.format_table(reports))
+    for note in notes:
+        print(note)
     return reports
 
 
