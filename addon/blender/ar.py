@@ -20,11 +20,16 @@ from mathutils import Vector
 
 from . import compat, gather, job, keys, store
 from ..core import angles, arlight
+from ..core.trackfile import Sunlight
 from ..estimate import errors, frames as clip_frames, notes
 
 WORLD_NAME = "sunlapse sky"
-# Frames of the clip measured for the light balance (spread over it).
-BALANCE_FRAMES = 5
+# A long clip's light is measured on this many frames spread over it (and
+# around each change of sunlight); Blender interpolates between them.
+LIGHT_FRAMES = 48
+# Frames are measured reduced to about this width: the shadows worth
+# measuring are tens of pixels wide there, and 24 MP frames cost seconds.
+LIGHT_WIDTH = 640
 AR_KEYS_PROP = "sunlapse_ar_frames"
 # Real shadows that see less of the sky than this are indoors or walled in:
 # their light is bounced, which the open-sky balance does not model.
@@ -133,87 +138,130 @@ def _clear_keys(id_data, paths):
             curves.remove(fc)
 
 
-def measure_balance(context, track, frames):
-    """([(frame, zenith, ShadowBalance, sky seen in shadow, sky seen lit)],
-    ground names): the footage's real shadows on `frames` (the model's cast
-    shadow toward the tracked Sun against the lit ground beside it); frames
-    where too little shadow shows are left out."""
+def light_frames(track) -> list:
+    """The frames whose light is measured: every keyed frame of a short
+    clip; on a long one LIGHT_FRAMES spread over it, plus the frames on
+    either side of each change of sunlight (where the lamp goes off)."""
+    frames = track.keyable()
+    numbers = [f.frame for f in frames]
+    if len(numbers) <= LIGHT_FRAMES:
+        return numbers
+    picks = set(notes.spread(numbers, LIGHT_FRAMES))
+    for a, b in zip(frames, frames[1:]):
+        if (a.sunlight == Sunlight.NO) != (b.sunlight == Sunlight.NO):
+            picks.update((a.frame, b.frame))
+    return sorted(picks)
+
+
+def measure_light(context, track, frames, progress=None):
+    """The footage's light on `frames` (core.arlight.LightSample each): on a
+    frame with direct sunlight, the model's cast shadow toward the tracked
+    Sun against the lit ground beside it; on one without, the ground's
+    brightness. Frames are read once, in order, reduced to about
+    LIGHT_WIDTH. Returns (samples, sky seen in shadow, sky seen lit, ground
+    names); the sky visibilities are the medians over the shadows measured
+    (1 where none was)."""
     settings = context.scene.sunlapse
     model, cam, clip = job.gather_all(context, settings)
     names = job.ground_names(settings, model) or gather.guess_ground(model)
     ids = model.ids_of(names)
-    if not ids:
-        return [], names
+    if not ids or not frames:
+        return [], 1.0, 1.0, names
     scene_n, camera_n = gather.build_scene(model), gather.build_camera(cam)
-    out = []
-    for f in frames:
+    stride = max(1, round(camera_n.width / LIGHT_WIDTH))
+    try:
+        source = clip_frames.FrameSource(
+            clip_frames.open_clip(clip.filepath, frames[0] - clip.frame_start),
+            clip.frame_start, frames[0] - clip.frame_start)
+    except errors.EstimateError:
+        return [], 1.0, 1.0, names
+    samples, seen_shadow, seen_lit = [], [], []
+    for i, f in enumerate(frames):
         est = track.frame(f)
         if est is None or not est.has_estimate:
             continue
+        if progress is not None:
+            progress(i / len(frames), f"AR setup: the footage's light on frame {f}")
         try:
-            bgr = clip_frames.read_frame(clip.filepath, f - clip.frame_start)
-        except errors.EstimateError:
-            continue
-        if bgr.shape[0] != camera_n.height or bgr.shape[1] != camera_n.width:
+            bgr = source.read(f)
+        except StopIteration:
+            break
+        if bgr is None or clip_frames.wrong_size(bgr, camera_n):
             continue
         sun = angles.sun_in_world_from_geographic(est.zenith_deg, est.azimuth_deg,
                                                   track.north_offset_deg)
         ground, shadow = notes.ground_and_model_shadow(scene_n, camera_n, ids, tuple(sun),
-                                                       settings.ignore_top_rows)
-        rgb = arlight.srgb_to_linear(bgr[..., ::-1] / 255.0)
-        bal = arlight.measure_shadow_balance(rgb, ground > 0, shadow > 0)
-        if bal is None:
+                                                       settings.ignore_top_rows, stride)
+        rgb = arlight.srgb_to_linear(bgr[::stride, ::stride, ::-1] / 255.0)
+        sample = arlight.LightSample(f, est.zenith_deg, est.sunlight)
+        if est.sunlight == Sunlight.NO:
+            sample.ground_linear = arlight.ground_level(rgb, ground > 0)
+        else:
+            sample.balance = arlight.measure_shadow_balance(rgb, ground > 0, shadow > 0)
+        if sample.balance is None and sample.ground_linear is None:
             continue
-        seen = []
-        for mask in (bal.shadow_mask, bal.lit_mask):
-            rows, cols = np.nonzero(mask)
-            _, origins = notes.ground_samples(scene_n, camera_n, ids, rows, cols)
-            seen.append(arlight.sky_seen(origins, lambda o, d: scene_n.occluded(o, d)))
-        out.append((f, est.zenith_deg, bal, seen[0], seen[1]))
-    return out, names
+        if sample.balance is not None:
+            for mask, seen in ((sample.balance.shadow_mask, seen_shadow),
+                               (sample.balance.lit_mask, seen_lit)):
+                rows, cols = np.nonzero(mask)
+                _, origins = notes.ground_samples(scene_n, camera_n, ids, rows * stride,
+                                                  cols * stride)
+                seen.append(arlight.sky_seen(origins, lambda o, d: scene_n.occluded(o, d)))
+        samples.append(sample)
+    vs = float(np.median(seen_shadow)) if seen_shadow else 1.0
+    vl = float(np.median(seen_lit)) if seen_lit else 1.0
+    return samples, vs, vl, names
 
 
-def key_light(context, sun_obj, balances, sky_seen_rgb=None):
-    """Keys the lamp's strength/colour and the sky's from the measured
-    balances (held constant before the first and after the last);
-    `sky_seen_rgb` replaces the shadows' measured sky visibility (from
-    match_render). Returns {frame: target shadow ratio RGB}."""
+def _sunlit(samples):
+    return [s for s in samples if s.balance is not None and s.sunlight != Sunlight.NO]
+
+
+def key_light(context, sun_obj, track, samples, vs, vl, corrections=None):
+    """Keys the lamp's strength and colour and the sky's, frame by frame,
+    from the measured light (core.arlight.light_per_frame; Blender
+    interpolates between the frames measured and holds the ends). Frames of
+    the track without direct sunlight that were not measured get the lamp
+    off too. `corrections` (from match_render) replace the shadows'
+    measured sky visibility. Returns {frame: target shadow ratio RGB}."""
     scene = context.scene
     world, bg = _sky_world(scene)
     data = sun_obj.data
     _clear_keys(data, {"energy", "color"})
     _clear_keys(world.node_tree, {f'nodes["{bg.name}"].inputs[0].default_value',
                                   f'nodes["{bg.name}"].inputs[1].default_value'})
-    # One Sun-to-sky balance for the clip (the median of the frames'): a
-    # few frames' shadows are too few pixels to key each on its own; the
-    # shadow ratio still follows the Sun's height frame by frame.
-    k = np.median([arlight.sun_to_sky(b.shadow_ratio, zenith, vs, vl)
-                   for _, zenith, b, vs, vl in balances], axis=0)
-    vs = float(np.median([b[3] for b in balances]))
-    vl = float(np.median([b[4] for b in balances]))
+    lights = arlight.light_per_frame(samples, vs, vl, corrections)
     targets = {}
-    for f, zenith, bal, _, _ in balances:
-        ratio = arlight.ratio_for(k, zenith, vs, vl)
-        targets[f] = ratio
-        sun_rgb, sky_rgb = arlight.sun_and_sky(
-            ratio, bal.lit_linear, zenith,
-            sky_seen_in_shadow=vs if sky_seen_rgb is None else sky_seen_rgb, sky_seen_lit=vl)
-        strength, color = arlight.as_strength_and_color(sun_rgb)
-        data.energy, data.color = strength, color
-        data.keyframe_insert("energy", frame=f)
-        data.keyframe_insert("color", frame=f)
-        strength, color = arlight.as_strength_and_color(sky_rgb)
+    for light in lights:
+        strength, color = arlight.as_strength_and_color(light.sun_rgb)
+        data.energy = strength if light.target_ratio is not None else 0.0
+        data.keyframe_insert("energy", frame=light.frame)
+        if light.target_ratio is not None:
+            # The colour stays the Sun's last where the lamp is off.
+            data.color = color
+            data.keyframe_insert("color", frame=light.frame)
+            targets[light.frame] = light.target_ratio
+        strength, color = arlight.as_strength_and_color(light.sky_rgb)
         bg.inputs["Color"].default_value = color + (1.0,)
         bg.inputs["Strength"].default_value = strength
-        bg.inputs["Color"].keyframe_insert("default_value", frame=f)
-        bg.inputs["Strength"].keyframe_insert("default_value", frame=f)
-    data[AR_KEYS_PROP] = [b[0] for b in balances]
-    return targets, vs, vl
+        bg.inputs["Color"].keyframe_insert("default_value", frame=light.frame)
+        bg.inputs["Strength"].keyframe_insert("default_value", frame=light.frame)
+    measured = {light.frame for light in lights}
+    dark = [f for f in track.without_sunlight() if f not in measured]
+    for f in dark:
+        data.energy = 0.0
+        data.keyframe_insert("energy", frame=f)
+    keyed = sorted(measured.union(dark))
+    data[AR_KEYS_PROP] = keyed
+    # These are the lamp's strength keys now: Apply to Sun Lamp replaces them.
+    data[keys.KEYED_FRAMES_PROP] = keyed
+    return targets
 
 
-# The check render: at most this wide, this many samples.
+# The check render: at most this wide, this many samples, on this many frames.
 MATCH_WIDTH = 480
 MATCH_SAMPLES = 16
+MATCH_FRAMES = 3
 
 
 def render_model_shadows(context, frame, mask, casters, inserts):
@@ -282,25 +330,35 @@ def render_model_shadows(context, frame, mask, casters, inserts):
     return tuple(float(v) for v in np.median(px[small], axis=0))
 
 
-def match_render(context, sun_obj, balances, model_objects, ground_names):
-    """Renders the model's own shadows once (render_model_shadows) on the
-    middle measured frame and re-keys the light so that they come out as
-    dark, per channel, as the footage's: what the shading formula leaves
-    out (specular, bounced light, bumps) is corrected by the renderer
-    itself. Returns (rendered ratio, target ratio) of that check, or None."""
+def match_render(context, sun_obj, track, samples, vs, vl, model_objects, ground_names):
+    """Renders the model's own shadows (render_model_shadows) on up to
+    MATCH_FRAMES frames with a measured shadow (the lowest Sun, the highest,
+    one between) and re-keys the light so that they come out as dark, per
+    channel, as the footage's: what the shading formula leaves out
+    (specular, bounced light, a ground brighter under a grazing Sun than
+    Lambert's) is corrected by the renderer itself, as a function of the
+    Sun's height. Returns (rendered ratio, target ratio) of each check."""
     ground = set(ground_names)
     casters = [o for o in model_objects if o.name not in ground]
-    if not casters:
-        return None
-    targets, vs, vl = key_light(context, sun_obj, balances)
-    f, zenith, bal, _, _ = balances[len(balances) // 2]
-    got = render_model_shadows(context, f, bal.shadow_mask, casters,
-                               [o for o in bpy.data.objects if gather.is_insert(o)])
-    if got is None:
-        return None
-    seen = arlight.effective_sky_seen(got, targets[f], vs, vl)
-    key_light(context, sun_obj, balances, sky_seen_rgb=seen)
-    return got, targets[f]
+    sunlit = sorted(_sunlit(samples), key=lambda s: s.zenith_deg)
+    if not casters or not sunlit:
+        return []
+    picks = [sunlit[round(i * (len(sunlit) - 1) / max(1, MATCH_FRAMES - 1))]
+             for i in range(min(MATCH_FRAMES, len(sunlit)))]
+    picks = list({s.frame: s for s in picks}.values())
+    targets = key_light(context, sun_obj, track, samples, vs, vl)
+    inserts = [o for o in bpy.data.objects if gather.is_insert(o)]
+    checks, corrections = [], []
+    for s in picks:
+        got = render_model_shadows(context, s.frame, s.balance.shadow_mask, casters, inserts)
+        if got is None:
+            continue
+        corrections.append((s.zenith_deg,
+                            arlight.effective_sky_seen(got, targets[s.frame], vs, vl)))
+        checks.append((got, targets[s.frame]))
+    if corrections:
+        key_light(context, sun_obj, track, samples, vs, vl, corrections)
+    return checks
 
 
 def preview_in_viewports(context, camera_obj):
@@ -396,32 +454,38 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         _place_insert(context, camera_obj)
         inserted = f", added '{gather.INSERT_NAME}'"
     light = ""
-    balances = []
+    samples, vs, vl, ground_names = [], 1.0, 1.0, []
     if balance and track is not None:
-        frames = [f.frame for f in track.estimated()]
-        picks = notes.spread(frames, BALANCE_FRAMES)
-        step(0.2, f"AR setup: measuring the footage's shadows on {len(picks)} frames")
-        balances, ground_names = measure_balance(context, track, picks)
-    checked = None
-    if balances:
-        key_light(context, sun, balances)
+        picks = light_frames(track)
+        step(0.2, f"AR setup: measuring the footage's light on {len(picks)} frames")
+        samples, vs, vl, ground_names = measure_light(
+            context, track, picks,
+            progress=lambda x, text: step(0.2 + 0.3 * x, text))
+    sunlit = _sunlit(samples)
+    checked = []
+    if sunlit:
+        key_light(context, sun, track, samples, vs, vl)
         if match_shadows and not comp_note:  # the check render reads a compositor output
-            step(0.5, "AR setup: rendering the model's shadows once to match the footage's")
+            step(0.5, "AR setup: rendering the model's shadows to match the footage's")
             try:
-                checked = match_render(context, sun, balances, model, ground_names)
+                checked = match_render(context, sun, track, samples, vs, vl, model,
+                                       ground_names)
             except (AttributeError, KeyError, RuntimeError, TypeError) as e:
                 if warnings is not None:
                     warnings.append(f"the check render of the model's shadows failed ({e}): "
                                     f"the light is set from the formula alone")
         if track is not None:
-            keys.apply_track(context, track, sun, sync_sky=False)
-        ratios = np.mean([b[2].shadow_ratio for b in balances], axis=0)
-        seen = np.mean([b[3] for b in balances])
-        figures = [f"light measured on {len(balances)} frame(s) of the footage: shadow/lit "
-                   f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear); their "
-                   f"casters hide {100 * (1 - seen):.0f}% of the sky"]
-        if checked is not None:
-            got, want = checked
+            # The lamp's strength is the light's now: only its direction is keyed.
+            keys.apply_track(context, track, sun, sync_sky=False, key_strength=False)
+        ratios = np.median([s.balance.shadow_ratio for s in sunlit], axis=0)
+        dark = len(samples) - len(sunlit)
+        figures = [f"light measured on {len(samples)} frame(s) of the footage: shadow/lit "
+                   f"R {ratios[0]:.2f} G {ratios[1]:.2f} B {ratios[2]:.2f} (linear, median of "
+                   f"{len(sunlit)}); their casters hide {100 * (1 - vs):.0f}% of the sky"]
+        if dark:
+            figures.append(f"{dark} frame(s) without direct sunlight: the lamp off, the sky "
+                           f"as bright as their ground")
+        for got, want in checked:
             figures.append(f"the model's shadows rendered at R {got[0]:.2f} G {got[1]:.2f} "
                            f"B {got[2]:.2f} for {want[0]:.2f}/{want[1]:.2f}/{want[2]:.2f}: "
                            f"corrected")
@@ -429,9 +493,9 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
             light = "; " + "; ".join(figures)
         else:
             details.extend(figures)
-            light = (f", lamp and sky lit as the footage's shadows show "
-                     f"({len(balances)} frames{', checked by a render' if checked else ''})")
-        if seen < ENCLOSED_SKY_SEEN:
+            light = (f", lamp and sky lit as the footage shows, frame by frame "
+                     f"({len(samples)} frames{', checked by renders' if checked else ''})")
+        if vs < ENCLOSED_SKY_SEEN:
             note = ("the footage's shadows are enclosed (a room?): the light of an open sky is "
                     "assumed and the inserts' shadows will come out too dark")
             if warnings is None:

@@ -81,12 +81,15 @@ def _key_strength(sun, frames, follow_ratio):
     return len(keyed)
 
 
-def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=False):
+def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=False,
+                key_strength=True):
     """Keys the Sun lamp (created if needed) on every estimated frame; returns it.
 
     Running it again replaces its own keys only. The lamp's strength is
     keyed off on frames without direct sunlight, and with keyframe_strength
-    follows the measured sun/ambient ratio. Frames that only extrapolate
+    follows the measured sun/ambient ratio; without key_strength it is left
+    as it is (Set Up AR Render keys it from the footage's light). Frames
+    that only extrapolate
     beyond the measured ones are not keyed (Track.extrapolated); frames
     whose Sun is predicted are.
     """
@@ -101,7 +104,8 @@ def apply_track(context, track, sun_obj=None, sync_sky=True, keyframe_strength=F
         lamp.point_lamp(sun, f.zenith_deg, _azimuth_world(track, f), frame=f.frame)
     sun[KEYED_FRAMES_PROP] = [f.frame for f in frames]
     _linear(sun, paths)
-    _key_strength(sun, frames, keyframe_strength)
+    if key_strength:
+        _key_strength(sun, frames, keyframe_strength)
     node = sky_node(context.scene) if sync_sky else None
     if node is not None:
         world = context.scene.world

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
+
+from .trackfile import Sunlight
 
 # Assumed ground albedo: it sets only the overall exposure of the light (the
 # lit ground's plate value over it is the irradiance / pi); the shadow ratios
@@ -26,6 +28,11 @@ GROUND_ALBEDO = 0.35
 MIN_RATIO, MAX_RATIO = 0.02, 0.95
 # Fewest pixels on each side for a measurement.
 MIN_PIXELS = 6
+# Frames' measurements are smoothed by a running median over this many
+# measured neighbours: it keeps a ramp (dusk, an exposure change) and a step
+# (a cloud's edge) where they are, and drops a frame or two measured wrong
+# (a passer-by in the shadow, a few pixels of shadow on a small frame).
+LIGHT_MEDIAN_WINDOW = 5
 
 
 def srgb_to_linear(v: np.ndarray) -> np.ndarray:
@@ -227,3 +234,103 @@ def as_strength_and_color(rgb: Sequence[float]):
     """(strength, colour with max channel 1) for a lamp or a background."""
     peak = max(max(rgb), 1e-9)
     return peak, tuple(c / peak for c in rgb)
+
+
+RGB = Tuple[float, float, float]
+
+
+def ground_level(rgb_linear: np.ndarray, ground: np.ndarray) -> Optional[RGB]:
+    """Median linear RGB of the ground the camera sees (edges left out), the
+    light it gets when no shadow can be told apart; None when too little
+    ground shows."""
+    core = erode(ground, max(1, round(ground.shape[1] / 400)))
+    if core.sum() < MIN_PIXELS:
+        return None
+    return _rgb(np.median(rgb_linear[core], axis=0))
+
+
+@dataclass
+class LightSample:
+    """One frame's light as the footage shows it: a shadow balance where
+    the Sun shines, the ground's brightness where it does not."""
+    frame: int
+    zenith_deg: float
+    sunlight: Optional[Sunlight]
+    balance: Optional[ShadowBalance] = None
+    ground_linear: Optional[Tuple[float, float, float]] = None
+
+
+@dataclass
+class FrameLight:
+    """The lamp's irradiance and the sky's radiance (linear RGB) for a frame,
+    and the shadow ratio they are meant to give (None without a Sun)."""
+    frame: int
+    sun_rgb: Tuple[float, float, float]
+    sky_rgb: Tuple[float, float, float]
+    target_ratio: Optional[Tuple[float, float, float]] = None
+
+
+def corrected_sky_seen(corrections, zenith_deg: float, measured: float):
+    """The shadows' sky visibility to use at `zenith_deg`: the check
+    renders' (zenith, RGB) interpolated per channel (held beyond the ends),
+    or the measured value without any."""
+    if not corrections:
+        return measured
+    pairs = sorted(corrections, key=lambda c: c[0])
+    zs = [z for z, _ in pairs]
+    return tuple(float(np.interp(zenith_deg, zs, [rgb[c] for _, rgb in pairs]))
+                 for c in range(3))
+
+
+def _running_median(rows: np.ndarray, window: int) -> np.ndarray:
+    """Per column, the median of each row's neighbourhood of `window` rows,
+    narrowed at the ends so that a ramp running to the end keeps its end."""
+    n, half = len(rows), window // 2
+    out = np.empty_like(rows)
+    for i in range(n):
+        reach = min(half, i, n - 1 - i)
+        out[i] = np.median(rows[i - reach:i + reach + 1], axis=0)
+    return out
+
+
+def light_per_frame(samples: Sequence[LightSample], sky_seen_in_shadow: float,
+                    sky_seen_lit: float,
+                    corrections: Optional[Sequence[Tuple[float, Sequence[float]]]] = None,
+                    ground_albedo: float = GROUND_ALBEDO) -> List[FrameLight]:
+    """The Sun and sky per measured frame, so that an insert's shadow is as
+    dark, and as tinted, as the footage's on that frame.
+
+    Where the frame has direct sunlight (or may have: a measured shadow is
+    evidence of it), the Sun-to-sky balance and the lit ground's brightness
+    follow the frames' own, through a running median in frame order (dusk
+    dims the Sun against the sky, an exposure ramp brightens the plate).
+    Where it has none, the lamp is off and the sky alone lights the ground
+    as bright as the footage shows it. `corrections`, (zenith deg, sky seen
+    RGB) pairs from check renders (effective_sky_seen), replace the
+    shadows' measured sky visibility, interpolated in the Sun's zenith: a
+    real ground's response departs from the formula's most for a low Sun."""
+    lit = sorted(((s, s.balance) for s in samples
+                  if s.balance is not None and s.sunlight != Sunlight.NO),
+                 key=lambda sb: sb[0].frame)
+    out: Dict[int, FrameLight] = {}
+    if lit:
+        window = min(LIGHT_MEDIAN_WINDOW, len(lit))
+        # log: the median of a ratio is the same whichever way it is taken.
+        k = np.exp(_running_median(np.log([
+            sun_to_sky(b.shadow_ratio, s.zenith_deg, sky_seen_in_shadow, sky_seen_lit)
+            for s, b in lit]), window))
+        level = np.exp(_running_median(np.log([b.lit_linear for _, b in lit]), window))
+        for (s, _), k_s, level_s in zip(lit, k, level):
+            ratio = ratio_for(k_s, s.zenith_deg, sky_seen_in_shadow, sky_seen_lit)
+            sun, sky = sun_and_sky(
+                ratio, level_s, s.zenith_deg, ground_albedo,
+                corrected_sky_seen(corrections, s.zenith_deg, sky_seen_in_shadow), sky_seen_lit)
+            out[s.frame] = FrameLight(s.frame, _rgb(np.asarray(sun)), _rgb(np.asarray(sky)),
+                                      ratio)
+    vl = min(1.0, max(0.2, sky_seen_lit))
+    for s in samples:
+        if s.sunlight == Sunlight.NO and s.ground_linear is not None:
+            # The sky alone: pi W vl = pi ground / albedo.
+            sky = np.asarray(s.ground_linear, dtype=np.float64) / (ground_albedo * vl)
+            out[s.frame] = FrameLight(s.frame, (0.0, 0.0, 0.0), _rgb(sky))
+    return [out[f] for f in sorted(out)]

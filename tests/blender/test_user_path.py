@@ -312,6 +312,42 @@ def test_ar_setup_keys_lamp_and_sky_from_the_footage_and_keeps_helpers_out_of_sh
     assert gather.INSERT_NAME not in model.names
 
 
+def test_ar_light_follows_the_frames_and_is_off_without_sunlight(estimated):
+    """A frame found without direct sunlight: Set Up AR Render keys the
+    lamp off there and lights the sky from its ground; on the other frames
+    the lamp keeps the strength measured from the footage (Apply to Sun
+    Lamp's strength keys used to overwrite it), so the lamp and the sky
+    together give the footage's shadow ratio."""
+    from sunlapse.blender import ar
+    out, truth, track = estimated
+    track.frames[2].sunlight = trackfile.Sunlight.NO
+    track.frames[2].predicted = True
+    store.store_track(track)
+    scene = bpy.context.scene
+    assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
+    assert bpy.ops.clip.sunlapse_setup_ar() == {"FINISHED"}
+    sun = scene.sunlapse.sun_lamp
+    bg = next(n for n in scene.world.node_tree.nodes if n.type == "BACKGROUND")
+    samples, vs, vl, _ = ar.measure_light(bpy.context, store.load_track(), [1, 2, 3])
+    assert [s.frame for s in samples if s.balance is not None] == [1, 2]
+    assert samples[2].ground_linear is not None
+    for s in samples:
+        scene.frame_set(s.frame)
+        S = np.array(sun.data.color) * sun.data.energy
+        W = np.array(bg.inputs["Color"].default_value[:3]) * bg.inputs["Strength"].default_value
+        assert W.min() > 0
+        if s.balance is None:
+            assert sun.data.energy == 0.0
+            continue
+        cos_z = math.cos(math.radians(s.zenith_deg))
+        ratio = vs * math.pi * W / (S * cos_z + vl * math.pi * W)
+        # The check render corrects the formula by a few thousandths here;
+        # the lamp at Apply's strength (the bug this guards) was 0.03-0.04 off.
+        assert np.all(np.abs(ratio - np.array(s.balance.shadow_ratio)) < 0.02), (
+            s.frame, ratio, s.balance.shadow_ratio)
+    assert sorted(sun.data[ar.AR_KEYS_PROP]) == [1, 2, 3]
+
+
 def test_ground_is_picked_as_an_object_and_names_match_in_any_case(tiny_plaza):
     from sunlapse.blender import gather, job
     open_preset(tiny_plaza)

@@ -56,3 +56,52 @@ def test_sky_seen_counts_blocked_directions():
     seen = arlight.sky_seen(np.zeros((1, 3), np.float32),
                             lambda o, d: d[:, 2] > math.cos(math.radians(30)), n=1024)
     assert seen == pytest.approx(0.75, abs=0.02)
+
+
+def _sample(frame, ratio, lit=(0.2, 0.2, 0.2), zenith=50.0, sunlight=arlight.Sunlight.YES):
+    bal = arlight.ShadowBalance(tuple(ratio), tuple(lit), 100, 100)
+    return arlight.LightSample(frame, zenith, sunlight, balance=bal)
+
+
+def test_light_follows_each_frames_shadows_to_the_clips_ends():
+    """Dusk: the shadows fade frame by frame to the last one; every frame's
+    light gives its own ratio back (the running median keeps a ramp)."""
+    ratios = np.linspace(0.3, 0.8, 9)
+    lights = arlight.light_per_frame([_sample(f, (r,) * 3) for f, r in enumerate(ratios, 1)],
+                                     1.0, 1.0)
+    assert [x.frame for x in lights] == list(range(1, 10))
+    for light, r in zip(lights, ratios):
+        assert light.target_ratio == pytest.approx((r,) * 3, abs=1e-6)
+        sky = math.pi * np.array(light.sky_rgb)
+        back = sky / (np.array(light.sun_rgb) * math.cos(math.radians(50.0)) + sky)
+        assert back == pytest.approx([r] * 3, abs=1e-6)
+
+
+def test_a_frame_measured_wrong_takes_its_neighbours_light_and_a_step_stays():
+    ratios = [0.3] * 3 + [0.9] + [0.3] * 4 + [0.6] * 5   # an outlier, then a cloud
+    lights = arlight.light_per_frame([_sample(f, (r,) * 3) for f, r in enumerate(ratios, 1)],
+                                     1.0, 1.0)
+    got = [x.target_ratio[0] for x in lights]
+    assert got[3] == pytest.approx(0.3, abs=1e-6)
+    assert got[:8] == pytest.approx([0.3] * 8, abs=1e-6)
+    assert got[8:] == pytest.approx([0.6] * 5, abs=1e-6)
+
+
+def test_without_sunlight_the_lamp_is_off_and_the_sky_lights_the_ground_as_the_footage():
+    dark = arlight.LightSample(5, 95.0, arlight.Sunlight.NO, ground_linear=(0.02, 0.03, 0.05))
+    lights = arlight.light_per_frame([_sample(1, (0.3,) * 3), dark], 1.0, 0.9)
+    off = lights[-1]
+    assert off.frame == 5 and off.sun_rgb == (0.0, 0.0, 0.0) and off.target_ratio is None
+    # A horizontal point seeing 90% of the sky gets pi W 0.9; albedo x that / pi = the plate.
+    lit = np.array(off.sky_rgb) * 0.9 * arlight.GROUND_ALBEDO
+    assert lit == pytest.approx([0.02, 0.03, 0.05])
+    # A frame without sunlight that still shows no ground is left to interpolation.
+    none = arlight.LightSample(6, 96.0, arlight.Sunlight.NO)
+    assert [x.frame for x in arlight.light_per_frame([dark, none], 1.0, 1.0)] == [5]
+
+
+def test_check_render_corrections_are_interpolated_in_the_suns_zenith():
+    corrections = [(80.0, (0.6, 0.6, 0.5)), (40.0, (0.9, 0.9, 0.8))]
+    assert arlight.corrected_sky_seen(corrections, 60.0, 1.0) == pytest.approx((0.75, 0.75, 0.65))
+    assert arlight.corrected_sky_seen(corrections, 20.0, 1.0) == pytest.approx((0.9, 0.9, 0.8))
+    assert arlight.corrected_sky_seen(None, 20.0, 0.7) == 0.7
