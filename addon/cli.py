@@ -68,7 +68,8 @@ def build_parser():
                    help="each frame's capture time (columns frame,local_time; local times use "
                         "--utc-offset): frames are tracked in capture order and smoothed over "
                         "real time; default: the scene's Frame Times setting")
-    place = p.add_argument_group("place and time (for --smoothing physical)")
+    place = p.add_argument_group("place and time (for --smoothing physical; the place, with "
+                                 "the frames' times, also says which frames are night)")
     place.add_argument("--latitude", type=float, help="degrees, north positive")
     place.add_argument("--longitude", type=float, help="degrees, east positive")
     place.add_argument("--date", help="YYYY-MM-DD of the first frame (local)")
@@ -306,8 +307,8 @@ def place_flags(args):
     them out with the panel's and the Sun Position add-on's)."""
     import datetime as dt
     from .blender.place import PlaceTimeFlags
-    if args.smoothing != "physical":
-        return None
+    if args.smoothing != "physical" and (args.latitude is None or args.longitude is None):
+        return None  # a place with the frames' times also says which frames are night
     return PlaceTimeFlags(
         latitude_deg=args.latitude, longitude_deg=args.longitude,
         date=dt.date.fromisoformat(args.date) if args.date else None,

@@ -36,6 +36,11 @@ Flags:
                         used as given)
   --fixed-latitude      use the given latitude as given: the default since
                         issue 25, kept so that scripts that pass it still run
+                        With the frames' times (--times, a times file or EXIF
+                        times), the place (--latitude and --longitude, else the
+                        GPS, else the panel's when not 0, 0) also says which
+                        frames are night, whatever the smoothing: those get no
+                        direct sunlight and the Sun the ephemeris puts there
   --initial-sun Z A     start from this Sun on the first frame (degrees, azimuth
                         as in the track file) instead of estimating it: measures
                         the tracker alone

@@ -150,6 +150,17 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
             track_extra["gps_deg"] = list(gps)
     if options.smoothing == "physical":
         place_and_time(context, settings, options, gps, place)
+    elif options.frame_times is not None:
+        # The place with the frames' times says which frames are night,
+        # whatever the smoothing: the flags', else the GPS fix, else the
+        # panel's (0, 0 is its default, not a place anybody films).
+        flagged = (place.latitude_deg, place.longitude_deg) if place is not None and \
+            place.latitude_deg is not None and place.longitude_deg is not None else None
+        known = flagged or gps or ((settings.latitude, settings.longitude)
+                                   if (settings.latitude, settings.longitude) != (0.0, 0.0)
+                                   else None)
+        if known is not None:
+            options.latitude_deg, options.longitude_deg = known
     scene, camera = gather.build_scene(model), gather.build_camera(cam)
     doubts = view_doubts(model, cam, scene, camera, names)
     for w in cam.warnings + gather.ground_doubts(model, names) + doubts:

@@ -47,6 +47,12 @@ def _sun_circle(track, numbers, raws, options, north):
     return (fit.zenith_deg, geo), fit.north_offset_deg
 
 
+def ephemeris_sun(native, t, latitude_deg: float, longitude_deg: float) -> Tuple[float, float]:
+    """(zenith, geographic azimuth) of the Sun at capture time `t` (UTC)."""
+    return native.sun_position(t.year, t.month, t.day, t.hour, t.minute,
+                               t.second + t.microsecond * 1e-6, latitude_deg, longitude_deg)
+
+
 def _physical(native, track, numbers, raws, options, north):
     """Fits the Sun's path through the raw angles; returns ((zeniths,
     geographic azimuths) per frame, north offset), or (None, north) with the
@@ -62,12 +68,9 @@ def _physical(native, track, numbers, raws, options, north):
         return None, north
     times = clock.frame_times(options.first_time, options.frame_seconds, numbers) \
         if options.frame_times is None else [options.frame_times[f] for f in numbers]
-
-    def sun(t, lat, lon):
-        return native.sun_position(t.year, t.month, t.day, t.hour, t.minute,
-                                   t.second + t.microsecond * 1e-6, lat, lon)
     fit = sunpath.fit_sun_path(times, [r.zenith_deg for r in raws], _world_azimuths(raws, north),
-                               [r.confidence for r in raws], sun,
+                               [r.confidence for r in raws],
+                               lambda t, lat, lon: ephemeris_sun(native, t, lat, lon),
                                options.latitude_deg, options.longitude_deg,
                                fit_latitude=options.fit_latitude)
     if not fit.success:
@@ -112,11 +115,14 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle)
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
+        by_clock = _predicted(r) and r.clock_sun is not None
+        if by_clock:
+            z_s, a_s = r.clock_sun   # night by the clock: where the Sun is, below the horizon
         predicted = _predicted(r) and z_s is not None and a_s is not None
         reason = r.reason
         if predicted:
-            reason = (f"{r.reason or 'no direct sunlight'}; its Sun is predicted from its "
-                      f"segment's path")
+            source = "the ephemeris at its time and place" if by_clock else "its segment's path"
+            reason = f"{r.reason or 'no direct sunlight'}; its Sun is predicted from {source}"
         elif _predicted(r):
             reason = f"{r.reason or 'no direct sunlight'}, and nothing bounds where the Sun is"
         est = trackfile.FrameEstimate(frame=r.frame, zenith_deg=_settled(z_s),

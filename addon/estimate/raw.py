@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any, Optional, Tuple
 
 from ..core.trackfile import Sunlight
 
@@ -15,7 +15,10 @@ class RawSun:
     None for both with the reason. tracked: the native TrackedFrame behind
     it (its shadow's ends and sun/ambient contrast), when the tracker
     refined it. sunlight: direct sunlight on the frame, where the method
-    decides it (a frame without it has no raw Sun: finish.py predicts one)."""
+    decides it (a frame without it has no raw Sun: finish.py predicts one).
+    clock_sun: (zenith, geographic azimuth) the ephemeris gives for the
+    frame's capture time and place, where that puts it at night: its
+    predicted Sun, below the horizon."""
     frame: int
     zenith_deg: Optional[float] = None
     azimuth_deg: Optional[float] = None
@@ -23,6 +26,7 @@ class RawSun:
     reason: Optional[str] = None
     tracked: Any = None
     sunlight: Optional[Sunlight] = None
+    clock_sun: Optional[Tuple[float, float]] = None
 
     @property
     def has_sun(self) -> bool:

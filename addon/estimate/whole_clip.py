@@ -165,6 +165,18 @@ LOOP_SCATTER_TIMES = 3.0
 # are not the Sun's where the path puts it (an engraved line, a dark
 # object): it is not counted as in sunlight (UNKNOWN) and gets the path.
 OFF_CIRCLE_UNLIT_DEG = 10.0
+# With capture times and the place, a frame whose Sun the ephemeris puts
+# below the horizon has no direct sunlight, whatever its evidence (a night
+# frame's street lights and ambient shading gave a raw Sun 5 deg up on the
+# Mulhouse webcam). The tracker's confirmation does not outweigh the clock
+# there (street lights cast hard shadows: it confirmed both of Mulhouse's
+# night frames) -- unless at least CLOCK_WRONG[0] confirmed frames, and
+# more than CLOCK_WRONG[1] of them, have the clock's Sun further below than
+# CLOCK_NIGHT_SLACK_DEG (a Sun just set still fits a contrast, and webcam
+# stamps run a minute or two off): then the times' zone or the place is
+# wrong, and the clock is not used. Either way the run names the frames.
+CLOCK_WRONG = (3, 0.5)
+CLOCK_NIGHT_SLACK_DEG = 2.0
 
 
 @dataclass
@@ -203,6 +215,13 @@ class WholeClipResult:
     # variance and the chosen direction's lead over far rivals.
     evidence: dict = field(default_factory=dict)
     message: Optional[str] = None
+    # Frames the tracker confirms in sunlight that the capture times and
+    # place put at night, and whether the clock was still used to flag
+    # night frames (night_by_the_clock; None: no clock).
+    clock_contradicted: List[int] = field(default_factory=list)
+    clock_trusted: Optional[bool] = None
+    # Frames the clock puts at night (their Sun is the ephemeris's).
+    clock_night: List[int] = field(default_factory=list)
 
 
 @dataclass
@@ -417,7 +436,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
              progress: Optional[Callable[[float], object]] = None,
              stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None,
              source: Optional[SourceFn] = None,
-             fit_circle: Optional[Callable[..., Any]] = None
+             fit_circle: Optional[Callable[..., Any]] = None,
+             clock_elevation_deg: Optional[Sequence[float]] = None
              ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
@@ -436,9 +456,14 @@ def estimate(native, scene, camera, frames: Sequence[int],
     the trimmed fit of the Sun's circle (core/trimmed_circle.py's
     fit_trimmed; None: the path gets no circle prior and no frame is
     doubted off a circle), passed in, so this controller can be driven with
-    stand-ins."""
+    stand-ins. `clock_elevation_deg`: per frame, the Sun's elevation the
+    ephemeris gives for its capture time and place (None when either is
+    unknown); a frame whose Sun is below the horizon has no direct
+    sunlight, unless the footage contradicts the times
+    (night_by_the_clock)."""
     return _WholeClip(native, scene, camera, frames, read_gray, ground_object_ids, times_s,
-                      ignore_top_rows, progress, stream, source, fit_circle).run()
+                      ignore_top_rows, progress, stream, source, fit_circle,
+                      clock_elevation_deg).run()
 
 
 class _WholeClip:
@@ -447,12 +472,18 @@ class _WholeClip:
     (capture order)."""
 
     def __init__(self, native, scene, camera, frames, read_gray, ground_object_ids, times_s,
-                 ignore_top_rows, progress, stream, source, fit_circle):
+                 ignore_top_rows, progress, stream, source, fit_circle,
+                 clock_elevation_deg=None):
         self.native, self.scene, self.camera = native, scene, camera
         self.frames, self.n = list(frames), len(frames)
         self.read_gray, self.stream, self.source = read_gray, stream, source
         self.ground_ids, self.times_s = list(ground_object_ids), times_s
         self.progress, self.fit_circle = progress, fit_circle
+        self.clock_elevation = None if clock_elevation_deg is None else \
+            list(clock_elevation_deg)
+        # Whether the times and place may say which frames are night: decided
+        # on the first frames' sunlight (night_by_the_clock).
+        self.clock_trusted: Optional[bool] = None
         self.result = WholeClipResult()
         # Frames whose evidence the path does not use (found without direct
         # sunlight; run()).
@@ -730,6 +761,8 @@ class _WholeClip:
                                     explained[k] >= SUNLIT_EXPLAINED_SHARE * typical)
             r.sunlight = Sunlight.YES if sunlit else \
                 Sunlight.NO if self.usable[k] else Sunlight.UNKNOWN
+        for k in self.night_by_the_clock(tracked):
+            frames[k].sunlight = Sunlight.NO
         bounds = _without_dark_segments(
             self.bounds, [r.sunlight == Sunlight.YES and self.path.margin[k] >= SEGMENT_MIN_MARGIN
                           for k, r in enumerate(frames)], self.starts)
@@ -750,14 +783,36 @@ class _WholeClip:
                            if r.sunlight == Sunlight.NO else r.reason)
         self.anchor_in_sunlight()
 
+    def night_by_the_clock(self, tracked: Optional[Sequence[bool]] = None) -> List[int]:
+        """Frames the ephemeris puts below the horizon at their capture time
+        and place. Decided once, on the frames the tracker confirms in
+        sunlight (`tracked`): those the clock puts further below than
+        CLOCK_NIGHT_SLACK_DEG contradict it (result.clock_contradicted);
+        when they are most of them (CLOCK_WRONG), the times (their zone)
+        or the place are wrong, not the footage, and the clock says nothing
+        (result.clock_trusted)."""
+        elevation = self.clock_elevation
+        if elevation is None:
+            return []
+        if self.clock_trusted is None and tracked is not None:
+            lit = [k for k, ok in enumerate(tracked) if ok]
+            against = [self.frames[k] for k in lit if elevation[k] < -CLOCK_NIGHT_SLACK_DEG]
+            self.clock_trusted = not (len(against) >= CLOCK_WRONG[0] and
+                                      len(against) > CLOCK_WRONG[1] * len(lit))
+            self.result.clock_trusted = self.clock_trusted
+            self.result.clock_contradicted = against
+        return [k for k, e in enumerate(elevation) if e < 0.0] if self.clock_trusted else []
+
     def sunlight_against_circle(self) -> None:
         """A Sun below the horizon (the frame's own, or its segment's
         circle's) lights no ground: whatever the frame shows, it has no
         direct sunlight. A Sun far off its circle (OFF_CIRCLE_UNLIT_DEG)
         is not the Sun's."""
-        for r in self.result.frames:
-            if any(sun is not None and sun[2] <= 0.0 for sun in (r.sun_in_world,
-                                                                 r.circle_in_world)):
+        night = set(self.night_by_the_clock())
+        self.result.clock_night = [self.frames[k] for k in sorted(night)]
+        for k, r in enumerate(self.result.frames):
+            if k in night or any(sun is not None and sun[2] <= 0.0
+                                 for sun in (r.sun_in_world, r.circle_in_world)):
                 r.sunlight = Sunlight.NO
                 self.unlit(r, "the Sun is below the horizon here")
             elif r.sunlight == Sunlight.YES and r.circle_in_world is not None and \
@@ -1024,18 +1079,40 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     native = native_loader.require()
     north = options.north_offset_deg
     reads = _ClipReads(native, clip_path, source, camera, gamma(options.method))
-    seconds = None
+    seconds, elevation, ephemeris = None, None, {}
     if times is not None:
         by_time = dict(zip(frames, clock.seconds_since(times)))
         seconds = [by_time[f] for f in visit]
+        if options.latitude_deg is not None and options.longitude_deg is not None:
+            at = dict(zip(frames, times))
+            ephemeris = {f: finish.ephemeris_sun(native, at[f], options.latitude_deg,
+                                                 options.longitude_deg) for f in visit}
+            elevation = [90.0 - ephemeris[f][0] for f in visit]
     result = estimate(
         native, scene, camera, visit, reads.read_gray, options.ground_object_ids, times_s=seconds,
         ignore_top_rows=options.ignore_top_rows,
         progress=None if progress is None else (lambda x: progress(0.95 * x)),
-        stream=reads.stream, source=reads.frame_source, fit_circle=trimmed_circle.fit_trimmed)
+        stream=reads.stream, source=reads.frame_source, fit_circle=trimmed_circle.fit_trimmed,
+        clock_elevation_deg=elevation)
+    if result.clock_contradicted:
+        shown = ", ".join(map(str, sorted(result.clock_contradicted)[:5]))
+        n = len(result.clock_contradicted)
+        if result.clock_trusted:
+            track.report("times", trackfile.ProblemKind.HINT,
+                         f"the frames' times and the place put the Sun below the horizon on "
+                         f"{n} frame(s) whose shadows look sunlit ({shown}): taken as night "
+                         f"(street lights cast hard shadows too); if they are day, check that "
+                         f"the times are UTC (or carry their zone)")
+        else:
+            track.report("times", trackfile.ProblemKind.HINT,
+                         f"the frames' times and the place put the Sun below the horizon on "
+                         f"{n} frame(s) that show its shadows (e.g. {shown}): check that the "
+                         f"times are UTC (or carry their zone) and the latitude and longitude; "
+                         f"night frames were found from the footage alone")
     track.method["initial"] = track.method["tracking"] = "whole_clip"
     by_frame = {r.frame: r for r in result.frames}
-    raws = [_raw_sun(by_frame[f], north) for f in frames]
+    night = set(result.clock_night)
+    raws = [_raw_sun(by_frame[f], north, ephemeris[f] if f in night else None) for f in frames]
     circle = {k: _geographic(by_frame[f].circle_in_world, north) for k, f in enumerate(frames)
               if by_frame[f].circle_in_world is not None}
     if result.anchor is not None:
@@ -1067,12 +1144,12 @@ def _geographic(sun_in_world, north: float) -> Tuple[float, float]:
     return float(z), float(angles.azimuth_geographic_from_world(a_world, north))
 
 
-def _raw_sun(r: RawFrame, north: float) -> RawSun:
+def _raw_sun(r: RawFrame, north: float, clock_sun=None) -> RawSun:
     if r.sun_in_world is None:
         return RawSun(r.frame, confidence=r.on_circle, reason=r.reason, tracked=r.tracked,
-                      sunlight=r.sunlight)
+                      sunlight=r.sunlight, clock_sun=clock_sun)
     return RawSun(r.frame, *_geographic(r.sun_in_world, north), confidence=r.on_circle,
-                  reason=r.reason, tracked=r.tracked, sunlight=r.sunlight)
+                  reason=r.reason, tracked=r.tracked, sunlight=r.sunlight, clock_sun=clock_sun)
 
 
 def _note(track, scene, camera, samples, by_frame, options) -> None:

@@ -436,3 +436,37 @@ def test_a_loop_whose_sun_goes_back_less_than_a_step_is_split(world):
     steady = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(2 * n)]
     assert run(world, [draw(world, d, k) for k, d in enumerate(steady)], None,
                trimmed_circle.fit_trimmed).jumps == []
+
+
+def test_the_clock_puts_night_frames_in_the_dark_unless_it_contradicts_the_footage(world):
+    """With capture times and a place, a frame the ephemeris puts below the
+    horizon has no direct sunlight even when it shows hard shadows (street
+    lights: the Mulhouse webcam's night frames); a clock that puts most
+    sunlit frames at night is a wrong zone, and is not used (issue 25)."""
+    n, night = 12, 6
+    frames = [draw(world, path(k, n), k) for k in range(n)]
+    frames[night] = draw(world, sun(40.0, 250.0), night)   # a street lamp's shadows
+    elevation = [35.0] * n
+    elevation[night] = -8.0
+    scene, camera = world[0], world[1]
+    numbers = list(range(1, n + 1))
+
+    def estimate(elevations):
+        return whole_clip.estimate(native, scene, camera, numbers,
+                                   lambda f: frames[f - 1], [0],
+                                   times_s=[600.0 * k for k in range(n)],
+                                   clock_elevation_deg=elevations)
+    result = estimate(elevation)
+    Sunlight = whole_clip.Sunlight
+    assert result.clock_trusted and result.clock_night == [night + 1]
+    assert result.frames[night].sunlight == Sunlight.NO
+    assert result.frames[night].sun_in_world is None and result.frames[night].confidence == 0.0
+    assert all(r.sunlight == Sunlight.YES for k, r in enumerate(result.frames) if k != night)
+    # The finishing puts its Sun where the ephemeris does, below the horizon.
+    raw = whole_clip._raw_sun(result.frames[night], 0.0, (98.0, 250.0))
+    assert raw.clock_sun == (98.0, 250.0) and not raw.has_sun
+
+    wrong = estimate([-20.0] * n)   # every frame at night: the zone is wrong
+    assert wrong.clock_trusted is False and wrong.clock_night == []
+    assert len(wrong.clock_contradicted) >= 3
+    assert sum(r.sunlight == Sunlight.YES for r in wrong.frames) >= n - 1
