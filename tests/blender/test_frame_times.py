@@ -113,3 +113,27 @@ def test_a_first_frame_without_a_clear_sun_is_tracked_back_from_the_next(tiny_pl
                                          track["north_offset_deg"]),
             sun_in_world_from_geographic(ref.zenith_deg, ref.azimuth_deg, truth.north_offset_deg))
         assert err < 3.0, (f["frame"], err)
+
+
+def test_the_place_and_times_say_which_frames_are_night_in_a_two_pass_run(tiny_plaza, tmp_path):
+    """Frame 3 stamped 02:00 (night at the given place) has no direct
+    sunlight and gets the Sun the ephemeris puts there, below the horizon,
+    whatever its shadows show (street lights cast hard shadows too);
+    without the place its footage decides."""
+    out, truth = tiny_plaza
+    t = local_times(truth)
+    night = dt.datetime.combine(t[1].date() + dt.timedelta(days=1), dt.time(2, 0))
+    times = write_times(tmp_path / "t.csv", [(1, t[0]), (2, t[1]), (3, night)])
+    frames = {}
+    for name, place in (("placed", ["--latitude", "48.85", "--longitude", "2.35"]),
+                        ("unplaced", [])):
+        path = str(tmp_path / f"{name}.sun.json")
+        proc = run_estimate(os.path.join(out, "scene.blend"), path, "--times", times,
+                            "--utc-offset", "2", *place)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        frames[name] = json.load(open(path))["frames"]
+    f3 = frames["placed"][2]
+    assert f3["sunlight"] == "no" and f3["predicted"] and f3["confidence"] == 0.0, f3
+    assert f3["zenith_deg"] > 90.0 and "ephemeris" in f3["reason"], f3
+    assert [f["sunlight"] for f in frames["placed"][:2]] == ["yes", "yes"]
+    assert frames["unplaced"][2]["sunlight"] == "yes", frames["unplaced"][2]
