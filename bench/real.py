@@ -51,6 +51,9 @@ CLIP_SPECS = {
     "amos-mulhouse": dict(footage="amos", short="mulhouse", lat=47.7467, lon=7.3386,
                           column="utc_time", utc_offset=0.0, north_known=True,
                           north_offset_deg=-28.0, min_elevation=4.0),
+    "amos-stlouis": dict(footage="amos", short="stlouis", lat=38.6260, lon=-90.1905,
+                         column="utc_time", utc_offset=0.0, north_known=True,
+                         north_offset_deg=0.0, min_elevation=4.0),
 }
 CLIPS = tuple(CLIP_SPECS)
 CONFIDENT = 0.5
