@@ -13,13 +13,17 @@ frames whose track confidence is below 0.5 (the track marks them). The
 footage is read from ../shared/real/marseille-sundial beside the work tree
 (the .blend files point there); a missing folder skips the run with a note.
 
-The AMOS webcam clips (amos-mulhouse; footage in ../shared/real/amos, filled
-by examples/real/amos_fetch.py; a missing folder skips them with a note) have
-one capture per frame with UTC stamps (utc_time); they are scored on the
-frames where the Sun is at least 4 deg up. Their north is not known, so
-their azimuths are scored after removing one constant offset per run (the
-circular median of truth minus estimate, printed in the row name). A line per
-run lists how the frames with the Sun below the horizon were flagged.
+The AMOS webcam clips (amos-mulhouse, amos-stlouis; footage in
+../shared/real/amos, filled by examples/real/amos_fetch.py; a missing folder
+skips them with a note) have one capture per frame with UTC stamps
+(utc_time); they are scored on the frames where the Sun is at least 4 deg up.
+Their north is given with the scene (the Sun Position add-on's north offset,
+so their runs enable that add-on: `--addons sun_position`), and their
+azimuths are scored in that north: a run's geographic azimuth plus the north
+offset it used (physical smoothing fits its own) minus the given one, so a
+fitted north that disagrees with the scene's costs azimuth. A line per run
+lists how the frames with the Sun below the horizon were flagged, and the
+north physical smoothing fitted.
 """
 import argparse
 import csv
@@ -37,14 +41,19 @@ from core import evaluation, trackfile  # noqa: E402
 # Per clip: its footage family (the --footage / --amos-footage folder), the
 # short name of its rows, the place, the times file's column and the offset of
 # its times from UTC, whether its north is known, and the lowest Sun scored.
+# A clip with `north_offset_deg` has its north given with the scene (the Sun
+# Position add-on's north offset in its .blend, which its runs enable).
 MARSEILLE = dict(footage="marseille", lat=43.3, lon=5.4, column="local_time", utc_offset=1.0,
                  north_known=True, min_elevation=None)
 CLIP_SPECS = {
     "marseille-2005-01-13": dict(MARSEILLE, short="2005-01-13"),
     "marseille-2005-03-21": dict(MARSEILLE, short="2005-03-21"),
     "amos-mulhouse": dict(footage="amos", short="mulhouse", lat=47.7467, lon=7.3386,
-                          column="utc_time", utc_offset=0.0, north_known=False,
-                          min_elevation=4.0),
+                          column="utc_time", utc_offset=0.0, north_known=True,
+                          north_offset_deg=-28.0, min_elevation=4.0),
+    "amos-stlouis": dict(footage="amos", short="stlouis", lat=38.6260, lon=-90.1905,
+                         column="utc_time", utc_offset=0.0, north_known=True,
+                         north_offset_deg=0.0, min_elevation=4.0),
 }
 CLIPS = tuple(CLIP_SPECS)
 CONFIDENT = 0.5
@@ -135,8 +144,9 @@ FLAGS = {"default": ["--method", "default"],
          "physical_lat": ["--method", "default", "--smoothing", "physical", "--fixed-latitude"]}
 
 
-def run_clip(blend, out_json, method, log):
-    cmd = ["blender", "-b", blend, "--python-exit-code", "1", "--python",
+def run_clip(blend, out_json, method, log, addons=()):
+    cmd = ["blender", "-b", blend] + (["--addons", ",".join(addons)] if addons else []) + [
+           "--python-exit-code", "1", "--python",
            os.path.join(ROOT, "examples", "run_estimate.py"), "--",
            "--out", out_json] + FLAGS[method]
     with open(log, "w") as f:
@@ -151,6 +161,14 @@ def geographic(track):
     out = trackfile.Track(north_offset_deg=0.0, initial=track.initial, extra=track.extra)
     out.frames = track.frames
     return out
+
+
+def in_given_north(view, track_north_deg, given_north_deg):
+    """A view's azimuths turned into the scene's given north: the run's
+    geographic azimuth plus the north offset it used (physical smoothing fits
+    its own) is the world azimuth, and the world azimuth minus the given
+    north offset is geographic in the scene's north."""
+    return rotated(view, track_north_deg - given_north_deg)
 
 
 def raw_view(track):
@@ -197,7 +215,9 @@ def main(argv=None):
         for method in args.methods:
             name = f"{spec['short']}/{method}"
             out_json = os.path.join(args.out, f"{clip}.{method}.sun.json")
-            code = run_clip(blend, out_json, method, out_json + ".log")
+            given = spec.get("north_offset_deg")
+            code = run_clip(blend, out_json, method, out_json + ".log",
+                            addons=("sun_position",) if given is not None else ())
             if code != 0 or not os.path.exists(out_json):
                 reports.append(evaluation.evaluate(name, None, truth,
                                                    message=f"run failed (see {out_json}.log)"))
@@ -206,6 +226,12 @@ def main(argv=None):
             views = [(name + " raw", raw_view(track)),
                      (name + " smoothed", geographic(track)),
                      (name + " raw, confident", confident_only(raw_view(track)))]
+            if given is not None:
+                views = [(label, in_given_north(view, track.north_offset_deg, given))
+                         for label, view in views]
+                fit = track.extra.get("sun_path_fit")
+                notes.append(f"{name}: north offset used {track.north_offset_deg:+.1f} deg "
+                             f"({'fitted' if fit else 'given'}; scene {given:+.1f})")
             if not spec["north_known"]:
                 views = [(f"{label} (azimuth +{off:.1f})", rotated(view, off))
                          for label, view in views
