@@ -222,8 +222,8 @@ def key_light(context, sun_obj, track, samples, vs, vl, corrections=None):
     from the measured light (core.arlight.light_per_frame; Blender
     interpolates between the frames measured and holds the ends). Frames of
     the track without direct sunlight that were not measured get the lamp
-    off too. `corrections` (from match_render) replace the shadows'
-    measured sky visibility. Returns {frame: target shadow ratio RGB}."""
+    off too. `corrections` (from match_render): the renderer's Sun
+    response by zenith. Returns {frame: target shadow ratio RGB}."""
     scene = context.scene
     world, bg = _sky_world(scene)
     data = sun_obj.data
@@ -262,6 +262,7 @@ def key_light(context, sun_obj, track, samples, vs, vl, corrections=None):
 MATCH_WIDTH = 480
 MATCH_SAMPLES = 16
 MATCH_FRAMES = 3
+MATCH_MIN_ELEVATION_DEG = 5.0
 
 
 def render_model_shadows(context, frame, mask, casters, inserts):
@@ -332,17 +333,21 @@ def render_model_shadows(context, frame, mask, casters, inserts):
 
 def match_render(context, sun_obj, track, samples, vs, vl, model_objects, ground_names):
     """Renders the model's own shadows (render_model_shadows) on up to
-    MATCH_FRAMES frames with a measured shadow (the lowest Sun, the highest,
-    one between) and re-keys the light so that they come out as dark, per
-    channel, as the footage's: what the shading formula leaves out
-    (specular, bounced light, a ground brighter under a grazing Sun than
-    Lambert's) is corrected by the renderer itself, as a function of the
-    Sun's height. Returns (rendered ratio, target ratio) of each check."""
+    MATCH_FRAMES frames with a measured shadow (the lowest Sun at least
+    MATCH_MIN_ELEVATION_DEG up, the highest, one between) and re-keys the
+    light so that they come out as dark, per channel, as the footage's:
+    what the shading formula leaves out (specular, bounced light, a ground
+    brighter under a grazing Sun than Lambert's) is corrected by the
+    renderer itself, as a function of the Sun's height. Returns (rendered
+    ratio, target ratio) of each check."""
     ground = set(ground_names)
     casters = [o for o in model_objects if o.name not in ground]
     sunlit = sorted(_sunlit(samples), key=lambda s: s.zenith_deg)
     if not casters or not sunlit:
         return []
+    # A Sun a degree or two up lights the ground through its disc's edge
+    # and long penumbrae: a check there says little of the frames above it.
+    sunlit = [s for s in sunlit if s.zenith_deg <= 90.0 - MATCH_MIN_ELEVATION_DEG] or sunlit
     picks = [sunlit[round(i * (len(sunlit) - 1) / max(1, MATCH_FRAMES - 1))]
              for i in range(min(MATCH_FRAMES, len(sunlit)))]
     picks = list({s.frame: s for s in picks}.values())
@@ -353,8 +358,8 @@ def match_render(context, sun_obj, track, samples, vs, vl, model_objects, ground
         got = render_model_shadows(context, s.frame, s.balance.shadow_mask, casters, inserts)
         if got is None:
             continue
-        corrections.append((s.zenith_deg,
-                            arlight.effective_sky_seen(got, targets[s.frame], vs, vl)))
+        corrections.append((s.zenith_deg, arlight.sun_response(got, targets[s.frame],
+                                                               s.zenith_deg, vs, vl)))
         checks.append((got, targets[s.frame]))
     if corrections:
         key_light(context, sun_obj, track, samples, vs, vl, corrections)

@@ -161,21 +161,20 @@ def sun_and_sky(shadow_ratio: Sequence[float], lit_linear: Sequence[float], zeni
     return tuple(sun), tuple(sky)
 
 
-def effective_sky_seen(rendered_ratio: Sequence[float], target_ratio: Sequence[float],
-                       sky_seen_in_shadow: float, sky_seen_lit: float):
-    """Per channel, the shadows' sky visibility that explains the ratio a
-    render gave (`rendered_ratio`, lit as sun_and_sky set it for
-    `target_ratio`): everything the formula leaves out (specular, bounced
-    light, the ground's bumps) folded into it. Feeding it back to
-    sun_and_sky makes the render give the target."""
-    out = []
-    for got, want in zip(rendered_ratio, target_ratio):
-        vs = min(1.0, max(0.2, sky_seen_in_shadow))
-        vl = min(1.0, max(vs, sky_seen_lit))
-        want = min(MAX_RATIO * vs / vl, max(MIN_RATIO, want))
-        x = want / max(1e-6, vs - want * vl)
-        out.append(min(1.0, max(0.2, got * (1.0 + vl * x) / x)))
-    return tuple(out)
+def sun_response(rendered_ratio: Sequence[float], target_ratio: Sequence[float],
+                 zenith_deg: float, sky_seen_in_shadow: float = 1.0,
+                 sky_seen_lit: float = 1.0) -> RGB:
+    """Per channel, how much more the renderer's ground answers the Sun
+    than the formula's Lambertian ground: the Sun-to-sky balance a check
+    render's ratio (`rendered_ratio`, lit as light_per_frame set it for
+    `target_ratio`) stands for, over the one it was lit with. A rough
+    ground's diffuse model brightens under a grazing Sun, a specular one
+    adds a highlight, bounced light lightens the shadow: all folded into
+    it, as a function of the Sun's height (corrections)."""
+    got = sun_to_sky(rendered_ratio, zenith_deg, sky_seen_in_shadow, sky_seen_lit)
+    want = sun_to_sky(target_ratio, zenith_deg, sky_seen_in_shadow, sky_seen_lit)
+    r, g, b = (min(10.0, max(0.1, x / y)) for x, y in zip(got, want))
+    return r, g, b
 
 
 def sun_to_sky(shadow_ratio: Sequence[float], zenith_deg: float, sky_seen_in_shadow: float = 1.0,
@@ -270,16 +269,17 @@ class FrameLight:
     target_ratio: Optional[Tuple[float, float, float]] = None
 
 
-def corrected_sky_seen(corrections, zenith_deg: float, measured: float):
-    """The shadows' sky visibility to use at `zenith_deg`: the check
-    renders' (zenith, RGB) interpolated per channel (held beyond the ends),
-    or the measured value without any."""
+def response_at(corrections, zenith_deg: float) -> RGB:
+    """The renderer's Sun response at `zenith_deg`: the check renders'
+    (zenith, RGB) interpolated per channel in log (held beyond the ends),
+    1 without any."""
     if not corrections:
-        return measured
+        return 1.0, 1.0, 1.0
     pairs = sorted(corrections, key=lambda c: c[0])
     zs = [z for z, _ in pairs]
-    return tuple(float(np.interp(zenith_deg, zs, [rgb[c] for _, rgb in pairs]))
-                 for c in range(3))
+    r, g, b = (float(np.exp(np.interp(zenith_deg, zs, [math.log(rgb[c]) for _, rgb in pairs])))
+               for c in range(3))
+    return r, g, b
 
 
 def _running_median(rows: np.ndarray, window: int) -> np.ndarray:
@@ -305,10 +305,11 @@ def light_per_frame(samples: Sequence[LightSample], sky_seen_in_shadow: float,
     follow the frames' own, through a running median in frame order (dusk
     dims the Sun against the sky, an exposure ramp brightens the plate).
     Where it has none, the lamp is off and the sky alone lights the ground
-    as bright as the footage shows it. `corrections`, (zenith deg, sky seen
-    RGB) pairs from check renders (effective_sky_seen), replace the
-    shadows' measured sky visibility, interpolated in the Sun's zenith: a
-    real ground's response departs from the formula's most for a low Sun."""
+    as bright as the footage shows it. `corrections`, (zenith deg, the
+    renderer's Sun response RGB) pairs from check renders (sun_response),
+    interpolated in the Sun's zenith (a ground's response departs from
+    Lambert's most under a low Sun), divide the balance the lamp is set
+    with, so that the render gives the footage's ratio."""
     lit = sorted(((s, s.balance) for s in samples
                   if s.balance is not None and s.sunlight != Sunlight.NO),
                  key=lambda sb: sb[0].frame)
@@ -322,9 +323,11 @@ def light_per_frame(samples: Sequence[LightSample], sky_seen_in_shadow: float,
         level = np.exp(_running_median(np.log([b.lit_linear for _, b in lit]), window))
         for (s, _), k_s, level_s in zip(lit, k, level):
             ratio = ratio_for(k_s, s.zenith_deg, sky_seen_in_shadow, sky_seen_lit)
-            sun, sky = sun_and_sky(
-                ratio, level_s, s.zenith_deg, ground_albedo,
-                corrected_sky_seen(corrections, s.zenith_deg, sky_seen_in_shadow), sky_seen_lit)
+            response = np.asarray(response_at(corrections, s.zenith_deg))
+            lamp_ratio = ratio_for(k_s / response, s.zenith_deg, sky_seen_in_shadow,
+                                   sky_seen_lit)
+            sun, sky = sun_and_sky(lamp_ratio, level_s, s.zenith_deg, ground_albedo,
+                                   sky_seen_in_shadow, sky_seen_lit)
             out[s.frame] = FrameLight(s.frame, _rgb(np.asarray(sun)), _rgb(np.asarray(sky)),
                                       ratio)
     vl = min(1.0, max(0.2, sky_seen_lit))

@@ -100,8 +100,24 @@ def test_without_sunlight_the_lamp_is_off_and_the_sky_lights_the_ground_as_the_f
     assert [x.frame for x in arlight.light_per_frame([dark, none], 1.0, 1.0)] == [5]
 
 
-def test_check_render_corrections_are_interpolated_in_the_suns_zenith():
-    corrections = [(80.0, (0.6, 0.6, 0.5)), (40.0, (0.9, 0.9, 0.8))]
-    assert arlight.corrected_sky_seen(corrections, 60.0, 1.0) == pytest.approx((0.75, 0.75, 0.65))
-    assert arlight.corrected_sky_seen(corrections, 20.0, 1.0) == pytest.approx((0.9, 0.9, 0.8))
-    assert arlight.corrected_sky_seen(None, 20.0, 0.7) == 0.7
+def test_a_renderer_brighter_under_the_sun_than_lambert_is_corrected_by_its_check():
+    """A renderer whose ground answers the Sun 1.4x Lambert's (a grazing
+    Sun on a rough diffuse ground): its shadow comes out darker than the
+    footage's; the check render's response makes the next light give the
+    footage's ratio, and it is interpolated in the Sun's zenith."""
+    def rendered(light, zenith, response):
+        sky = math.pi * np.array(light.sky_rgb)
+        sun = np.array(light.sun_rgb) * math.cos(math.radians(zenith)) * response
+        return tuple(sky / (sun + sky))
+    sample = _sample(1, (0.4, 0.45, 0.5), zenith=80.0)
+    first = arlight.light_per_frame([sample], 1.0, 1.0)[0]
+    got = rendered(first, 80.0, 1.4)
+    assert got[0] < 0.4 - 0.05       # too dark without the correction
+    response = arlight.sun_response(got, first.target_ratio, 80.0)
+    assert response == pytest.approx((1.4, 1.4, 1.4), rel=1e-6)
+    fixed = arlight.light_per_frame([sample], 1.0, 1.0, [(80.0, response)])[0]
+    assert rendered(fixed, 80.0, 1.4) == pytest.approx((0.4, 0.45, 0.5), abs=1e-6)
+    corrections = [(80.0, (2.0, 2.0, 1.0)), (40.0, (1.0, 1.0, 1.0))]
+    assert arlight.response_at(corrections, 60.0) == pytest.approx((2 ** 0.5, 2 ** 0.5, 1.0))
+    assert arlight.response_at(corrections, 85.0) == pytest.approx((2.0, 2.0, 1.0))
+    assert arlight.response_at(None, 20.0) == (1.0, 1.0, 1.0)
