@@ -21,7 +21,6 @@ which a run reads when that add-on is enabled (bench/real.py passes
 `--addons sun_position`).
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -32,6 +31,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.dirname(HERE))
 from run_estimate import load_sunlapse  # noqa: E402
+sys.path.insert(0, HERE)
+from make_blend import mark_points  # noqa: E402
 
 # (name, x range, y range, z top[, ridge (x, z) for a gable roof along y])
 SCENES = {
@@ -129,14 +130,7 @@ def main():
     scene.frame_start = clip.frame_start
     scene.frame_end = clip.frame_start + clip.frame_duration - 1
     scene.frame_set(clip.frame_start)
-    with open(os.path.join(HERE, f"{args.clip}.marks.json")) as f:
-        marks = json.load(f)["marks"]
-    w, h = clip.size
-    for m in marks:
-        track = clip.tracking.tracks.new(name=m["name"], frame=1)
-        marker = track.markers.find_frame(1)
-        px, py = m["pixel"]
-        marker.co = ((px + 0.5) / w, 1.0 - (py + 0.5) / h)
+    mark_points(clip, os.path.join(HERE, f"{args.clip}.marks.json"))
     if bpy.ops.clip.sunlapse_solve_camera(focal_mm=spec["lens_mm"]) != {"FINISHED"}:
         raise SystemExit("make_amos_blend: the camera solve failed")
     report = scene.sunlapse.last_report
@@ -171,7 +165,7 @@ def main():
     cam = scene.camera
     print(f"make_amos_blend: {out}: {report}; camera at ({cam.location.x:.1f}, "
           f"{cam.location.y:.1f}, {cam.location.z:.1f}); clip {clip.filepath}, "
-          f"{clip.frame_duration} frames {w}x{h}")
+          f"{clip.frame_duration} frames {clip.size[0]}x{clip.size[1]}")
 
 
 if __name__ == "__main__":

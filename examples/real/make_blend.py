@@ -70,6 +70,20 @@ def ball(name, radius, centre, collection):
     return obj
 
 
+def mark_points(clip, marks_json):
+    """The marks file's points as tracking markers on the clip's first frame,
+    named with their world coordinates (what Solve Camera from Marked
+    Points reads)."""
+    with open(marks_json) as f:
+        marks = json.load(f)["marks"]
+    w, h = clip.size
+    for m in marks:
+        track = clip.tracking.tracks.new(name=m["name"], frame=1)
+        marker = track.markers.find_frame(1)
+        px, py = m["pixel"]
+        marker.co = ((px + 0.5) / w, 1.0 - (py + 0.5) / h)
+
+
 def main():
     args = parse(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
     load_sunlapse().register()
@@ -80,14 +94,7 @@ def main():
     scene.frame_start = clip.frame_start
     scene.frame_end = clip.frame_start + clip.frame_duration - 1
     scene.frame_set(clip.frame_start)
-    with open(args.marks) as f:
-        marks = json.load(f)["marks"]
-    w, h = clip.size
-    for m in marks:
-        track = clip.tracking.tracks.new(name=m["name"], frame=1)
-        marker = track.markers.find_frame(1)
-        px, py = m["pixel"]
-        marker.co = ((px + 0.5) / w, 1.0 - (py + 0.5) / h)
+    mark_points(clip, args.marks)
     result = bpy.ops.clip.sunlapse_solve_camera()
     if result != {"FINISHED"}:
         raise SystemExit("make_blend: the camera solve failed")
