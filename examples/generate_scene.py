@@ -11,21 +11,27 @@
 integer seed or a fixed member (the plaza of issue 14); examples/random_scene.py
 draws it (place, date, hours, north offset, camera, casters, ground, clutter,
 clouds, exposure drift, shake, noise, compression, or a room lit through a
-window) and it is written to DIR/spec.json too. Its defaults are the suite's:
-32 frames at 320x180.
+window; for the kinds of random_scene.PREFIXES also twilight, a rough
+model, an overcast run, buildings, several days with their nights, trees)
+and it is written to DIR/spec.json too. Its defaults are the suite's: 32
+frames at 320x180 (48 for multi-day members).
 
 Writes into DIR:
   clip.mp4          the footage (Cycles, few samples, no denoising, H.264)
   truth.sun.json    per-frame Sun in the track-file shape ("sunlapse.truth")
   scene.blend       what a user would have: the coarse model in a collection
                     "Model", the matched camera, the clip as a MovieClip; no
-                    lamp, none of the footage-only objects
+                    lamp, none of the footage-only objects; for a rough-model
+                    member (rough<seed>) the model and camera as a user
+                    models them by hand, off the true ones
+  scene_true.blend  rough-model members only: the same with the true model
   masks/mask_NNNN.png   ground-truth cast-shadow masks on the ground for a few
                     frames (255 = ground in shadow, 0 = elsewhere)
   render.blend      the full render scene, for inspection and truth checks
 
 For random scenes the footage also has what the user's scene does not: the
-camera shakes, the exposure drifts and clouds dim the Sun (all keyframed in
+camera shakes, the exposure drifts and clouds dim the Sun, an overcast run
+turns the lamp off and the sky grey, trees cast dappled shadows (all in
 render.blend, none in scene.blend, where the camera is at rest), and the
 truth's extra.random_scene holds the spec.
 
@@ -447,7 +453,8 @@ def parse_args(argv):
     which.add_argument("--preset", choices=sorted(PRESETS))
     which.add_argument("--random", metavar="KEY",
                        help="a random scene of the suite (examples/random_scene.py): an "
-                            "integer seed, or a fixed member: "
+                            "integer seed, <kind><seed> for a kind in "
+                            + ", ".join(random_scene.PREFIXES) + ", or a fixed member: "
                             + ", ".join(sorted(random_scene.FIXED)))
     p.add_argument("--out", required=True)
     p.add_argument("--tiny", action="store_true",

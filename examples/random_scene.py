@@ -2,7 +2,10 @@
 
 bpy-free: the spec is a plain JSON-able dict that examples/generate_scene.py
 (`--random KEY`) turns into a render, and that bench/suite.py hashes into its
-cache key. KEY is an integer seed or the name of a fixed member (FIXED).
+cache key. KEY is an integer seed, the name of a fixed member (FIXED), or
+<prefix><seed> for a kind of member (PREFIXES: twilight, rough models,
+overcast runs, urban scenes, multi-day clips, trees), each drawn from its own
+random stream so that no kind changes another's scenes.
 
 The Sun comes from a `sun_position(y, m, d, h, mi, s, lat, lon) -> (zenith,
 azimuth)` callable (UTC; `_native.sun_position`), so drawing is exactly
