@@ -1,7 +1,7 @@
 """The randomised scene suite: render (once), estimate as users do, score.
 
   python3 bench/suite.py [--scenes N] [--twilight N] [--rough N] [--overcast N]
-                         [--urban N] [--multiday N] [--trees N] [--true-model]
+                         [--urban N] [--walls N] [--multiday N] [--trees N] [--true-model]
                          [--no-times] [--seeds 1,2,5-9,rough1-6] [--jobs J]
                          [--estimator-only] [--smoothings two_pass,physical]
                          [--method default] [--cache DIR] [--out FIGURES.json]
@@ -26,6 +26,9 @@ footage brings (examples/random_scene.py PREFIXES):
                 falls and drifting over the clip
   --urban N     urban1 ...: 2-4 buildings 6-20 m tall with eaves seen from
                 12-45 m up; the Sun's shadows fall on walls and ground
+  --walls N     walls1 ...: the same streets seen from 4-12 m up across them:
+                walls fill most of the view (45 % or more), some lit, some in
+                a building's shadow, more shadow on walls than on the ground
   --multiday N  multiday1 ...: 48 frames over 2 or 3 days at a fixed
                 interval, nights dark; the times are given to the estimator
                 (--times, from the truth's local times) unless --no-times
@@ -89,7 +92,7 @@ TWILIGHT_SCENES = 8
 # The kinds added for issue 25 item 7, off by default (flag -> prefix).
 KINDS = {"rough": random_scene.ROUGH_PREFIX, "overcast": random_scene.OVERCAST_PREFIX,
          "urban": random_scene.URBAN_PREFIX, "multiday": random_scene.MULTIDAY_PREFIX,
-         "trees": random_scene.TREES_PREFIX}
+         "trees": random_scene.TREES_PREFIX, "walls": random_scene.WALLS_PREFIX}
 # A rough member's twin scored on the true model: "<key>/true".
 TRUE_SUFFIX = "/true"
 
@@ -409,6 +412,9 @@ def main(argv=None):
     p.add_argument("--urban", type=int, default=0,
                    help="urban members urban1, 2, ... (default 0): buildings 6-20 m tall "
                         "with eaves, shadows on walls")
+    p.add_argument("--walls", type=int, default=0,
+                   help="wall members walls1, 2, ... (default 0): streets seen from 4-12 m up "
+                        "across them, shadows on walls more than on the ground")
     p.add_argument("--multiday", type=int, default=0,
                    help="multi-day members multiday1, 2, ... (default 0): 48 frames over 2-3 "
                         "days with the nights in them, the times given")

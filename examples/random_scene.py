@@ -73,6 +73,10 @@ OVERCAST_JUDGED = 0.5
 # camera that sees walls and ground; the Sun's shadows fall on walls.
 URBAN_PREFIX = "urban"
 URBAN_HEIGHT_M = (6.0, 20.0)
+# Keys "walls<seed>": the same streets seen from a camera 4-12 m up looking
+# across them at the facades: walls fill most of the view and the Sun's
+# shadows fall on walls more than on the ground.
+WALLS_PREFIX = "walls"
 # Keys "multiday<seed>": MULTIDAY_DAYS days with the nights in them, frames
 # at a fixed interval (as a webcam), 1.5 times the suite's frames; the times
 # are given to the estimator. The night sky dims as twilight's does; the
@@ -86,7 +90,7 @@ TREES_PREFIX = "trees"
 # Every prefix of a member kind; a key is <prefix><seed> (seeds plain: the
 # static members).
 PREFIXES = (TWILIGHT_PREFIX, ROUGH_PREFIX, OVERCAST_PREFIX, URBAN_PREFIX, MULTIDAY_PREFIX,
-            TREES_PREFIX)
+            TREES_PREFIX, WALLS_PREFIX)
 
 GROUNDS = ["paving", "asphalt", "grass", "wood", "cobbles"]
 CASTER_SHAPES = ["pole", "box", "wall", "kiosk", "lshape", "cylinder"]
@@ -693,14 +697,14 @@ def urban_view(spec, sun_position, grid=(32, 18)):
     out["frames"] = []
     for f in check_frames(len(suns), suns):
         s = sun_in_world(suns[f][0], suns[f][1] + spec["north_offset_deg"])
-        counts = {"wall_shadow": 0, "ground_shadow": 0, "ground_lit": 0}
+        counts = {"wall_shadow": 0, "wall_lit": 0, "ground_shadow": 0, "ground_lit": 0}
         for kind, p, normal in points:
             if kind == "roof" or _dot(normal, s) <= 0.0:
                 continue
             q = [p[k] + 0.02 * normal[k] for k in range(3)]
             shadowed = _first_hit(q, s, boxes) is not None
             if kind == "wall":
-                counts["wall_shadow"] += shadowed
+                counts["wall_" + ("shadow" if shadowed else "lit")] += 1
             else:
                 counts["ground_" + ("shadow" if shadowed else "lit")] += 1
         out["frames"].append({k: v / n for k, v in counts.items()})
@@ -713,6 +717,22 @@ def _urban_view_ok(view):
                 f["ground_lit"] >= 0.08 for f in view["frames"]))
 
 
+def _walls_view_ok(view):
+    return (view is not None and view["ground"] >= 0.08 and view["wall"] >= 0.45 and
+            all(f["wall_shadow"] >= 0.06 and f["wall_lit"] >= 0.06 and
+                f["wall_shadow"] >= f["ground_shadow"] for f in view["frames"]))
+
+
+# How the camera sees the streets: urban (from above: walls and ground) and
+# walls (from low across the street: mostly facades).
+URBAN_VIEWS = {
+    URBAN_PREFIX: dict(height_m=(12.0, 45.0), lens_mm=(18.0, 35.0), depression_deg=(22.0, 55.0),
+                       view_width_m=(25.0, 90.0), ok=_urban_view_ok),
+    WALLS_PREFIX: dict(height_m=(4.0, 12.0), lens_mm=(28.0, 50.0), depression_deg=(10.0, 35.0),
+                       view_width_m=(12.0, 45.0), ok=_walls_view_ok),
+}
+
+
 def _inside_footprint(p, item, margin):
     a = math.radians(item["rotation_z_deg"])
     px, py = p[0] - item["location"][0], p[1] - item["location"][1]
@@ -722,24 +742,28 @@ def _inside_footprint(p, item, margin):
     return abs(u) < w + margin and abs(v) < d + margin
 
 
-def _draw_urban(rng, sun_position, frames, resolution):
-    """Two to four buildings URBAN_HEIGHT_M tall with eaves on a street grid,
-    seen from a camera 12-45 m up that sees walls and ground; on the first,
-    middle and last frame some walls that face the Sun lie in a building's
-    shadow, and the ground shows shadow and sunlight."""
+def _draw_urban(rng, sun_position, frames, resolution, view=URBAN_PREFIX):
+    """Two to four buildings URBAN_HEIGHT_M tall with eaves on a street grid.
+    view "urban": seen from a camera 12-45 m up that sees walls and ground;
+    on the first, middle and last frame some walls that face the Sun lie in
+    a building's shadow, and the ground shows shadow and sunlight. view
+    "walls": from 4-12 m up across the street, walls fill most of the view,
+    some lit and some in a building's shadow, more shadow on walls than on
+    the ground (URBAN_VIEWS)."""
+    how = URBAN_VIEWS[view]
     t, suns = _draw_time(rng, sun_position, frames, (1.0, 6.0), lambda s: True)
     north = round(rng.uniform(-180.0, 180.0), 2)
     width, height = resolution
-    for _ in range(60):
-        height_m = rng.uniform(12.0, 45.0)
-        lens = rng.uniform(18.0, 35.0)
-        depression = rng.uniform(22.0, 55.0)
+    for _ in range(60 if view == URBAN_PREFIX else 300):
+        height_m = rng.uniform(*how["height_m"])
+        lens = rng.uniform(*how["lens_mm"])
+        depression = rng.uniform(*how["depression_deg"])
         vfov_half = math.degrees(math.atan(SENSOR_WIDTH_MM * height / width / 2.0 / lens))
         if depression - vfov_half < 4.0:
             continue
         dist_h = height_m / math.tan(math.radians(depression))
         slant = math.hypot(height_m, dist_h)
-        if not 25.0 <= slant * SENSOR_WIDTH_MM / lens <= 90.0:
+        if not how["view_width_m"][0] <= slant * SENSOR_WIDTH_MM / lens <= how["view_width_m"][1]:
             continue
         yaw = rng.uniform(0.0, 360.0)
         loc = [dist_h * math.sin(math.radians(yaw)), dist_h * math.cos(math.radians(yaw)),
@@ -748,7 +772,8 @@ def _draw_urban(rng, sun_position, frames, resolution):
                     camera={"location": [round(v, 4) for v in loc], "target": [0.0, 0.0, 0.0],
                             "lens_mm": round(lens, 2)},
                     render={"frames": frames, "resolution": list(resolution), "samples": 8},
-                    urban={"buildings": 0})
+                    urban={"buildings": 0} if view == URBAN_PREFIX else
+                    {"buildings": 0, "view": view})
         cam = camera_of(spec)
         corners = [cam.ground_point(x, 0.0) for x in (0.0, float(width))]
         if any(c is None or math.hypot(c[0], c[1]) > 150.0 for c in corners):
@@ -776,7 +801,7 @@ def _draw_urban(rng, sun_position, frames, resolution):
             continue
         spec.update(casters=casters)
         spec["urban"]["buildings"] = len(casters)
-        if _urban_view_ok(urban_view(spec, sun_position)):
+        if how["ok"](urban_view(spec, sun_position)):
             break
     else:
         return None
@@ -1099,8 +1124,8 @@ def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION
         for _ in range(20):  # an unlucky draw (no caster fits) draws again
             if room:
                 spec = _draw_room(rng, sun_position, frames, tuple(resolution))
-            elif prefix == URBAN_PREFIX:
-                spec = _draw_urban(rng, sun_position, frames, tuple(resolution))
+            elif prefix in URBAN_VIEWS:
+                spec = _draw_urban(rng, sun_position, frames, tuple(resolution), prefix)
             else:
                 spec = _draw_outdoor(rng, sun_position, frames, tuple(resolution), when)
             if spec is not None and prefix == TREES_PREFIX:

@@ -40,8 +40,9 @@ def test_default_members_are_the_forty():
 
 
 def test_seeds_take_every_kind():
-    assert suite.parse_seeds("1,rough1-2,overcast3,urban1,multiday2,trees1,twilight4") == \
-        ["1", "rough1", "rough2", "overcast3", "urban1", "multiday2", "trees1", "twilight4"]
+    assert suite.parse_seeds("1,rough1-2,overcast3,urban1,multiday2,trees1,twilight4,walls2") == \
+        ["1", "rough1", "rough2", "overcast3", "urban1", "multiday2", "trees1", "twilight4",
+         "walls2"]
     with pytest.raises(Exception, match="members of a kind"):
         suite.parse_seeds("cloudy1")
     with pytest.raises(ValueError, match="integer seed"):
@@ -148,3 +149,13 @@ def test_trees_are_footage_only_and_cast_in_view(key):
     names = {c["name"] for c in spec["casters"]}
     assert not names & {t["name"] for t in spec["trees"]}
     assert all(random_scene.casters_in_view(spec, SP))
+
+
+@pytest.mark.parametrize("key", ["walls1", "walls2"])
+def test_wall_scenes_put_the_shadows_on_walls(key):
+    spec = random_scene.draw(key, SP)
+    assert spec["urban"]["view"] == "walls" and spec["camera"]["location"][2] <= 12.0
+    view = random_scene.urban_view(spec, SP)
+    assert view["wall"] >= 0.45 and view["ground"] >= 0.08
+    for f in view["frames"]:
+        assert f["wall_shadow"] >= max(0.06, f["ground_shadow"]) and f["wall_lit"] >= 0.06
