@@ -1,6 +1,8 @@
 """The randomised scene suite: render (once), estimate as users do, score.
 
-  python3 bench/suite.py [--scenes N] [--twilight N] [--seeds 1,2,5-9] [--jobs J]
+  python3 bench/suite.py [--scenes N] [--twilight N] [--rough N] [--overcast N]
+                         [--urban N] [--walls N] [--multiday N] [--trees N] [--true-model]
+                         [--no-times] [--seeds 1,2,5-9,rough1-6] [--jobs J]
                          [--estimator-only] [--smoothings two_pass,physical]
                          [--method default] [--cache DIR] [--out FIGURES.json]
 
@@ -10,7 +12,29 @@ fifth seed is a room lit through a window), then the twilight members
 twilight1 ... up to --twilight (default 8): clips that run past sunset or
 start before sunrise, the Sun 3-8 deg below the horizon at their end, the
 direct light fading out over the last 4 deg above it and the exposure rising
-as the light falls. Each is rendered by
+as the light falls. Then, each when asked for (default 0), the kinds real
+footage brings (examples/random_scene.py PREFIXES):
+  --rough N     rough1 ...: the footage rendered with the true model, the
+                scene.blend estimated carrying the model as a user models by
+                hand (casters moved 5-30 cm, scaled 3-10 % per axis, turned up
+                to 3 deg; the camera turned 0.3 deg, its focal length 2 % off);
+                --true-model also scores each on its scene_true.blend (rows
+                "rough1/true"), beside and outside the summary
+  --overcast N  overcast1 ...: a run of 6-12 frames inside the clip under
+                cloud (the Sun lamp off, a flat grey sky, 1-3 frames of
+                transition each side) and the exposure ramping up as the light
+                falls and drifting over the clip
+  --urban N     urban1 ...: 2-4 buildings 6-20 m tall with eaves seen from
+                12-45 m up; the Sun's shadows fall on walls and ground
+  --walls N     walls1 ...: the same streets seen from 4-12 m up across them:
+                walls fill most of the view (45 % or more), some lit, some in
+                a building's shadow, more shadow on walls than on the ground
+  --multiday N  multiday1 ...: 48 frames over 2 or 3 days at a fixed
+                interval, nights dark; the times are given to the estimator
+                (--times, from the truth's local times) unless --no-times
+  --trees N     trees1 ...: 1-3 trees not in the model whose leafy crowns
+                cast dappled shadows on the ground
+Each is rendered by
 examples/generate_scene.py --random KEY at 320x180, 32 frames, into
 CACHE/<key>/ (default build/suite-cache/, outside git), and re-rendered only
 when its spec or random_scene.GENERATOR_VERSION changes (the folder's
@@ -19,14 +43,19 @@ cache_key file).
 Each scene's scene.blend is then run exactly as a user would:
   blender -b scene.blend --python examples/run_estimate.py -- --out T --method M
           --smoothing S
-(no --ground: the ground is found by the add-on). Frames are judged where the
-Sun is at least 4 deg up. Printed per scene: zenith and
+(no --ground: the ground is found by the add-on; --times CSV for the
+multi-day members). Frames are judged where the Sun is at least 4 deg up
+(and, in an overcast run, where at least half the Sun's light comes through).
+Frames without direct sunlight in the footage (the Sun below the horizon, the
+overcast run) are judged on the track's per-frame sunlight flag instead; the
+table's "dark" column counts those flagged "no" of them. Printed per scene: zenith and
 azimuth mean/max error, direction mean/max, the estimate's total_s; then the
 pass rate (mean <= 1 deg and max <= 3 deg in zenith and azimuth), the
 confidence calibration (frames with confidence >= 0.8 within 2 deg; frames
 more than 5 deg off at confidence >= 0.8), the time, and on frames with the
 Sun below the horizon how many the track flags without direct sunlight and
-the highest Sun it answers there; then the reliability table (confidence in
+the highest Sun it answers there (and the same for the overcast frames,
+with how far their predicted Sun is from the truth); then the reliability table (confidence in
 10 bins against the share of frames within 2 deg), its expected calibration
 error and the frames more than 5 deg off at confidence >= 0.5. Figures only: the
 exit code is 0 whatever the figures (non-zero only for bad flags).
@@ -60,6 +89,12 @@ CONFIDENT_WRONG_DEG = 5.0
 JUDGED_MAX_ZENITH_DEG = 86.0
 SMOOTHINGS = tuple(options.keys(options.SMOOTHINGS))
 TWILIGHT_SCENES = 8
+# The kinds added for issue 25 item 7, off by default (flag -> prefix).
+KINDS = {"rough": random_scene.ROUGH_PREFIX, "overcast": random_scene.OVERCAST_PREFIX,
+         "urban": random_scene.URBAN_PREFIX, "multiday": random_scene.MULTIDAY_PREFIX,
+         "trees": random_scene.TREES_PREFIX, "walls": random_scene.WALLS_PREFIX}
+# A rough member's twin scored on the true model: "<key>/true".
+TRUE_SUFFIX = "/true"
 
 
 def sun_position():
@@ -71,12 +106,17 @@ def sun_position():
     return _native.sun_position
 
 
-def scene_keys(count, seeds, twilight=0):
+def scene_keys(count, seeds, twilight=0, kinds=None):
+    """The members: `seeds` as given, else the static ones, the twilight
+    ones and `kinds` ({prefix: how many})."""
     if seeds:
         return seeds
     fixed = sorted(random_scene.FIXED)
-    return (fixed + [str(s) for s in range(1, count + 1)])[:count] + \
+    keys = (fixed + [str(s) for s in range(1, count + 1)])[:count] + \
         [f"{random_scene.TWILIGHT_PREFIX}{s}" for s in range(1, twilight + 1)]
+    for prefix, n in (kinds or {}).items():
+        keys += [f"{prefix}{s}" for s in range(1, n + 1)]
+    return keys
 
 
 def parse_seeds(text):
@@ -88,15 +128,14 @@ def parse_seeds(text):
         if part in random_scene.FIXED:
             keys.append(part)
             continue
-        prefix = random_scene.TWILIGHT_PREFIX if part.startswith(
-            random_scene.TWILIGHT_PREFIX) else ""
-        a, _, b = part[len(prefix):].partition("-")
+        prefix, rest = random_scene.split_key(part)
+        a, _, b = rest.partition("-")
         try:
             lo, hi = int(a), int(b or a)
         except ValueError:
             raise argparse.ArgumentTypeError(
-                f"--seeds takes integers, ranges (3-7), twilight members (twilight1-4) "
-                f"or fixed members "
+                f"--seeds takes integers, ranges (3-7), members of a kind "
+                f"({', '.join(p + '1-4' for p in random_scene.PREFIXES)}) or fixed members "
                 f"({', '.join(sorted(random_scene.FIXED))}), got '{part}'")
         keys.extend(f"{prefix}{s}" for s in range(lo, hi + 1))
     if not keys:
@@ -145,12 +184,28 @@ def render(key, spec, cache, log_dir):
     return key, folder, time.perf_counter() - t0, None
 
 
-def estimate(key, folder, method, smoothing, out_dir, log_dir):
-    track = os.path.join(out_dir, smoothing, f"{key}.sun.json")
+def times_csv(folder, path):
+    """The truth's local capture times as a times file (frame,local_time)."""
+    truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
+    with open(path, "w") as fh:
+        fh.write("frame,local_time\n")
+        for f, t in zip(truth.frames, truth.extra["local_times"]):
+            fh.write(f"{f.frame},{t}\n")
+    return path
+
+
+def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False):
+    """Runs the estimate on the scene's scene.blend (a "<key>/true" twin: on
+    its scene_true.blend); `times` passes the truth's capture times."""
+    twin = key.endswith(TRUE_SUFFIX)
+    name = key.replace("/", "+")
+    track = os.path.join(out_dir, smoothing, f"{name}.sun.json")
     os.makedirs(os.path.dirname(track), exist_ok=True)
     if os.path.exists(track):
         os.unlink(track)
     args = ["--out", track, "--method", method, "--smoothing", smoothing]
+    if times:
+        args += ["--times", times_csv(folder, os.path.join(out_dir, f"{name}.times.csv"))]
     if smoothing == "physical":
         truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
         d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
@@ -160,11 +215,12 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir):
                  "--date", d0.date().isoformat(), "--start-time", d0.strftime("%H:%M"),
                  "--utc-offset", str(d0.utcoffset().total_seconds() / 3600),
                  "--frame-seconds", str((d1 - d0).total_seconds())]
-    log = os.path.join(log_dir, f"estimate-{smoothing}-{key}.log")
+    log = os.path.join(log_dir, f"estimate-{smoothing}-{name}.log")
     t0 = time.perf_counter()
     with open(log, "w") as fh:
         rc = subprocess.run(nice_blender(
-            os.path.join(folder, "scene.blend"), "--python-exit-code", "1", "--python",
+            os.path.join(folder, "scene_true.blend" if twin else "scene.blend"),
+            "--python-exit-code", "1", "--python",
             os.path.join(ROOT, "examples", "run_estimate.py"), "--", *args),
             stdout=fh, stderr=subprocess.STDOUT, env=BLENDER_ENV).returncode
     wall = time.perf_counter() - t0
@@ -184,18 +240,32 @@ def score(key, folder, track_path, wall_s, error):
         row.update(passed=False, estimated=0)
         return row
     track = trackfile.read_track(track_path)
-    # Accuracy is judged where the Sun casts shadows (JUDGED_MAX_ZENITH_DEG);
-    # frames with the Sun below the horizon are judged on their sunlight flag.
-    up = [t for t in truth.frames if t.zenith_deg <= JUDGED_MAX_ZENITH_DEG]
+    spec = truth.extra.get("random_scene") or {}
+    # Accuracy is judged where the Sun casts shadows (JUDGED_MAX_ZENITH_DEG,
+    # and most of its light through an overcast run's cloud); frames without
+    # direct sunlight (the Sun below the horizon, overcast) are judged on
+    # their sunlight flag.
+    index = {t.frame: i for i, t in enumerate(truth.frames)}
+    up = [t for t in truth.frames
+          if random_scene.judged(spec, index[t.frame], t.zenith_deg, JUDGED_MAX_ZENITH_DEG)]
     rep = evaluation.evaluate(key, track, dataclasses.replace(truth, frames=up))
     by_frame = {f.frame: f for f in track.frames}
+    judged = {t.frame for t in up}
     per_frame, night = [], []
     for t in truth.frames:
         e = by_frame.get(t.frame)
-        if t.zenith_deg > 90.0:
+        if random_scene.no_direct_sun(spec, index[t.frame], t.zenith_deg):
+            off = None
+            if e is not None and e.has_estimate:
+                off = round(evaluation.angle_between_deg(
+                    evaluation.direction(e.zenith_deg, e.azimuth_deg + track.north_offset_deg),
+                    evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)),
+                    3)
             night.append({"frame": t.frame, "sunlight": e and e.sunlight and e.sunlight.value,
-                          "zenith_deg": e and e.zenith_deg})
-        if t.zenith_deg > JUDGED_MAX_ZENITH_DEG:
+                          "zenith_deg": e and e.zenith_deg, "true_zenith_deg": t.zenith_deg,
+                          "why": "night" if t.zenith_deg > 90.0 else "overcast",
+                          "error_deg": off, "confidence": e and e.confidence})
+        if t.frame not in judged:
             continue
         if e is None or not e.has_estimate:
             per_frame.append({"frame": t.frame, "error_deg": None,
@@ -228,16 +298,21 @@ def _f(v, width=6):
 
 def print_rows(rows, smoothing):
     print(f"\n== smoothing: {smoothing}")
-    print(f"{'scene':<13}{'pass':>5}{'z mean':>8}{'z max':>8}{'a mean':>8}{'a max':>8}"
-          f"{'d mean':>8}{'d max':>8}{'conf>=.8':>9}{'total_s':>8}  scene")
+    print(f"{'scene':<15}{'pass':>5}{'z mean':>8}{'z max':>8}{'a mean':>8}{'a max':>8}"
+          f"{'d mean':>8}{'d max':>8}{'conf>=.8':>9}{'>5@.5':>6}{'dark':>8}{'total_s':>8}  scene")
     for r in rows:
         conf = [p for p in r.get("per_frame", []) if p["confidence"] is not None and
                 p["confidence"] >= CONFIDENT and p["error_deg"] is not None]
-        print(f"{r['scene']:<13}{'yes' if r['passed'] else 'NO':>5}"
+        wrong = sum(p["error_deg"] is not None and p["confidence"] is not None and
+                    p["error_deg"] > CONFIDENT_WRONG_DEG and p["confidence"] >= 0.5
+                    for p in r.get("per_frame", []))
+        dark = r.get("night", [])
+        dark_text = f"{sum(p['sunlight'] == 'no' for p in dark)}/{len(dark)}" if dark else "-"
+        print(f"{r['scene']:<15}{'yes' if r['passed'] else 'NO':>5}"
               f"{_f(r.get('zenith_mean'), 8)}{_f(r.get('zenith_max'), 8)}"
               f"{_f(r.get('azimuth_mean'), 8)}{_f(r.get('azimuth_max'), 8)}"
               f"{_f(r.get('direction_mean'), 8)}{_f(r.get('direction_max'), 8)}"
-              f"{len(conf):>5}/{r['frames']:<3}{_f(r.get('total_s'), 8)}  "
+              f"{len(conf):>5}/{r['frames']:<3}{wrong:>6}{dark_text:>8}{_f(r.get('total_s'), 8)}  "
               + (f"ERROR {r['error']}" if r.get("error") else r["description"]))
 
 
@@ -246,7 +321,10 @@ def summary(rows):
     confident = [p for p in frames if p["confidence"] is not None and
                  p["confidence"] >= CONFIDENT and p["error_deg"] is not None]
     times = [r["total_s"] for r in rows if r.get("total_s") is not None]
-    night = [p for r in rows for p in r.get("night", [])]
+    dark = [p for r in rows for p in r.get("night", [])]
+    night = [p for p in dark if p.get("why", "night") == "night"]
+    overcast = [p for p in dark if p.get("why") == "overcast"]
+    overcast_off = [p["error_deg"] for p in overcast if p["error_deg"] is not None]
     scored = [(p["error_deg"], p["confidence"]) for p in frames
               if p["error_deg"] is not None and p["confidence"] is not None]
     bins, ece = evaluation.reliability(scored, CONFIDENT_WITHIN_DEG)
@@ -267,6 +345,11 @@ def summary(rows):
         "night_flagged": sum(p["sunlight"] == "no" for p in night),
         "night_max_altitude_deg": max((90.0 - p["zenith_deg"] for p in night
                                        if p["zenith_deg"] is not None), default=None),
+        "overcast_frames": len(overcast),
+        "overcast_flagged": sum(p["sunlight"] == "no" for p in overcast),
+        "overcast_error_mean_deg": (sum(overcast_off) / len(overcast_off)
+                                    if overcast_off else None),
+        "overcast_error_max_deg": max(overcast_off, default=None),
         "total_s_mean": sum(times) / len(times) if times else None,
         "total_s_max": max(times) if times else None,
         "total_s_sum": sum(times) if times else None,
@@ -301,6 +384,10 @@ def print_summary(s, smoothing):
              f"without direct sunlight (target >= 98%), highest answered Sun "
              f"{_f(s['night_max_altitude_deg'], 0)} deg up (target <= 8)"
              if s["night_frames"] else "")
+          + (f"; overcast: {s['overcast_flagged']}/{s['overcast_frames']} frames flagged "
+             f"without direct sunlight, their Sun {_f(s['overcast_error_mean_deg'], 0)} deg off "
+             f"on average, {_f(s['overcast_error_max_deg'], 0)} at most"
+             if s.get("overcast_frames") else "")
           + (f"; runs failed: {', '.join(s['failed_runs'])}" if s["failed_runs"] else ""))
 
 
@@ -312,8 +399,33 @@ def main(argv=None):
                    help="twilight members added to them: twilight1, 2, ... (default "
                         f"{TWILIGHT_SCENES}): clips that run past sunset or start before "
                         "sunrise")
+    p.add_argument("--rough", type=int, default=0,
+                   help="rough-model members rough1, 2, ... (default 0): the footage of the "
+                        "true model, the estimate on a hand-made one (casters 5-30 cm off, "
+                        "3-10%% scaled, up to 3 deg turned; camera 0.3 deg and 2%% of focal off)")
+    p.add_argument("--true-model", action="store_true",
+                   help="also score every rough member on its true model (rows <key>/true, "
+                        "not counted in the summary)")
+    p.add_argument("--overcast", type=int, default=0,
+                   help="overcast members overcast1, 2, ... (default 0): a run of 6-12 frames "
+                        "under cloud (no direct sunlight, flat sky) and an exposure ramp")
+    p.add_argument("--urban", type=int, default=0,
+                   help="urban members urban1, 2, ... (default 0): buildings 6-20 m tall "
+                        "with eaves, shadows on walls")
+    p.add_argument("--walls", type=int, default=0,
+                   help="wall members walls1, 2, ... (default 0): streets seen from 4-12 m up "
+                        "across them, shadows on walls more than on the ground")
+    p.add_argument("--multiday", type=int, default=0,
+                   help="multi-day members multiday1, 2, ... (default 0): 48 frames over 2-3 "
+                        "days with the nights in them, the times given")
+    p.add_argument("--trees", type=int, default=0,
+                   help="tree members trees1, 2, ... (default 0): footage-only trees casting "
+                        "dappled shadows")
+    p.add_argument("--no-times", action="store_true",
+                   help="do not give the multi-day members their capture times")
     p.add_argument("--seeds", type=parse_seeds,
-                   help="exactly these scenes instead: e.g. 1,4,10-12,plaza14")
+                   help="exactly these scenes instead: e.g. 1,4,10-12,plaza14,twilight1-3,"
+                        "rough1-6")
     p.add_argument("--jobs", type=int, default=1, help="scenes rendered/estimated at once")
     p.add_argument("--estimator-only", action="store_true",
                    help="never render: estimate the scenes already in the cache")
@@ -330,15 +442,17 @@ def main(argv=None):
     args = p.parse_args(argv)
     if args.scenes < 1:
         p.error(f"--scenes must be at least 1, got {args.scenes}")
-    if args.twilight < 0:
-        p.error(f"--twilight must be 0 or more, got {args.twilight}")
+    for flag in ("twilight",) + tuple(KINDS):
+        if getattr(args, flag) < 0:
+            p.error(f"--{flag} must be 0 or more, got {getattr(args, flag)}")
     if args.jobs < 1:
         p.error(f"--jobs must be at least 1, got {args.jobs}")
     smoothings = [s for s in args.smoothings.split(",") if s]
     bad = [s for s in smoothings if s not in SMOOTHINGS]
     if bad or not smoothings:
         p.error(f"--smoothings takes {', '.join(SMOOTHINGS)}, got '{args.smoothings}'")
-    keys = scene_keys(args.scenes, args.seeds, args.twilight)
+    keys = scene_keys(args.scenes, args.seeds, args.twilight,
+                      {prefix: getattr(args, flag) for flag, prefix in KINDS.items()})
     cache, work = os.path.abspath(args.cache), os.path.abspath(args.work)
     log_dir = os.path.join(work, "logs")
     os.makedirs(cache, exist_ok=True)
@@ -383,23 +497,39 @@ def main(argv=None):
 
     figures = {"method": args.method, "cache": cache, "smoothings": {}}
     t_all = time.perf_counter()
+    runs = list(keys)
+    if args.true_model:  # each rough member's twin right after it
+        runs = [r for k in keys for r in ([k, k + TRUE_SUFFIX] if "rough_model" in specs[k]
+                                          else [k])]
     for smoothing in smoothings:
         def run(k):
-            if k in render_errors:
-                return {"scene": k, "description": random_scene.describe(specs[k]),
-                        "frames": specs[k]["render"]["frames"], "wall_s": 0.0,
-                        "error": render_errors[k], "passed": False, "estimated": 0}
-            track, wall, err = estimate(k, folders[k], args.method, smoothing,
-                                        os.path.join(work, "tracks"), log_dir)
-            return score(k, folders[k], track, wall, err)
+            base = k[:-len(TRUE_SUFFIX)] if k.endswith(TRUE_SUFFIX) else k
+            if base in render_errors:
+                return {"scene": k, "description": random_scene.describe(specs[base]),
+                        "frames": specs[base]["render"]["frames"], "wall_s": 0.0,
+                        "error": render_errors[base], "passed": False, "estimated": 0}
+            times = not args.no_times and \
+                specs[base].get("multiday", {}).get("times_given", False)
+            track, wall, err = estimate(k, folders[base], args.method, smoothing,
+                                        os.path.join(work, "tracks"), log_dir, times)
+            return score(k, folders[base], track, wall, err)
         with cf.ThreadPoolExecutor(args.jobs) as pool:
-            rows = list(pool.map(run, keys))
+            rows = list(pool.map(run, runs))
         print_rows(rows, smoothing)
-        s = summary(rows)
+        members = [r for r in rows if not r["scene"].endswith(TRUE_SUFFIX)]
+        s = summary(members)
         print_summary(s, smoothing)
         print_reliability(s)
-        figures["smoothings"][smoothing] = {"summary": s, "scenes": rows}
-    print(f"\nsuite: {len(keys)} scenes x {len(smoothings)} smoothing(s) in "
+        twins = [r for r in rows if r["scene"].endswith(TRUE_SUFFIX)]
+        entry = {"summary": s, "scenes": rows}
+        if twins:
+            t = summary(twins)
+            entry["true_model_summary"] = t
+            print(f"true-model twins (not in the summary above): {t['passed']}/{t['scenes']} "
+                  f"pass; {t['over_5deg_at_half']} frames more than {CONFIDENT_WRONG_DEG:g} deg "
+                  f"off at confidence >= 0.5")
+        figures["smoothings"][smoothing] = entry
+    print(f"\nsuite: {len(runs)} runs x {len(smoothings)} smoothing(s) in "
           f"{time.perf_counter() - t_all:.0f} s; tracks and logs in {work}")
     if args.out:
         with open(args.out, "w") as fh:

@@ -11,21 +11,27 @@
 integer seed or a fixed member (the plaza of issue 14); examples/random_scene.py
 draws it (place, date, hours, north offset, camera, casters, ground, clutter,
 clouds, exposure drift, shake, noise, compression, or a room lit through a
-window) and it is written to DIR/spec.json too. Its defaults are the suite's:
-32 frames at 320x180.
+window; for the kinds of random_scene.PREFIXES also twilight, a rough
+model, an overcast run, buildings, several days with their nights, trees)
+and it is written to DIR/spec.json too. Its defaults are the suite's: 32
+frames at 320x180 (48 for multi-day members).
 
 Writes into DIR:
   clip.mp4          the footage (Cycles, few samples, no denoising, H.264)
   truth.sun.json    per-frame Sun in the track-file shape ("sunlapse.truth")
   scene.blend       what a user would have: the coarse model in a collection
                     "Model", the matched camera, the clip as a MovieClip; no
-                    lamp, none of the footage-only objects
+                    lamp, none of the footage-only objects; for a rough-model
+                    member (rough<seed>) the model and camera as a user
+                    models them by hand, off the true ones
+  scene_true.blend  rough-model members only: the same with the true model
   masks/mask_NNNN.png   ground-truth cast-shadow masks on the ground for a few
                     frames (255 = ground in shadow, 0 = elsewhere)
   render.blend      the full render scene, for inspection and truth checks
 
 For random scenes the footage also has what the user's scene does not: the
-camera shakes, the exposure drifts and clouds dim the Sun (all keyframed in
+camera shakes, the exposure drifts and clouds dim the Sun, an overcast run
+turns the lamp off and the sky grey, trees cast dappled shadows (all in
 render.blend, none in scene.blend, where the camera is at rest), and the
 truth's extra.random_scene holds the spec.
 
@@ -44,7 +50,7 @@ import subprocess
 import sys
 
 import bpy
-from mathutils import Vector
+from mathutils import Quaternion, Vector
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -342,14 +348,16 @@ def sun_at(native, when, preset):
 
 
 def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=True,
-                    sky_factors=None):
+                    sky_factors=None, overcast=None):
     """A Sun lamp of the real angular size and a Nishita sky that follows it,
     keyframed on every frame. `strength_factors` dims the lamp per frame
     (clouds, the horizon), `sky_factors` the sky (twilight: the sky keeps
     the colour of a Sun just below the horizon, dimmer). Without
     `sky_importance` Cycles builds no importance map of the world: the sky
     (no Sun disc) is smooth, and rebuilding the map on every frame costs ~8x
-    the render of a small frame (measured 10.2 vs 1.3 s)."""
+    the render of a small frame (measured 10.2 vs 1.3 s). `overcast`, a pair
+    (radiance, per-frame shares), mixes in a flat grey sky of that radiance
+    (a background node named "Overcast") by each frame's share."""
     lamp_data = bpy.data.lights.new("Sun", "SUN")
     lamp_data.angle = math.radians(SUN_ANGULAR_DIAMETER_DEG)
     lamp_data.energy = SUN_STRENGTH
@@ -368,6 +376,18 @@ def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=Tr
     bg = world.node_tree.nodes["Background"]
     bg.inputs["Strength"].default_value = SKY_STRENGTH
     world.node_tree.links.new(sky.outputs["Color"], bg.inputs["Color"])
+    mix = None
+    if overcast is not None:
+        nt = world.node_tree
+        grey = nt.nodes.new("ShaderNodeBackground")
+        grey.name = "Overcast"
+        grey.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        grey.inputs["Strength"].default_value = overcast[0]
+        mix = nt.nodes.new("ShaderNodeMixShader")
+        out = nt.nodes["World Output"]
+        nt.links.new(bg.outputs["Background"], mix.inputs[1])
+        nt.links.new(grey.outputs["Background"], mix.inputs[2])
+        nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
 
     for i, (z, a) in enumerate(suns):
         f = i + 1
@@ -382,6 +402,9 @@ def add_sun_and_sky(scene, suns, north, strength_factors=None, sky_importance=Tr
         if sky_factors is not None:
             bg.inputs["Strength"].default_value = SKY_STRENGTH * sky_factors[i]
             bg.inputs["Strength"].keyframe_insert("default_value", frame=f)
+        if mix is not None:
+            mix.inputs["Fac"].default_value = overcast[1][i]
+            mix.inputs["Fac"].keyframe_insert("default_value", frame=f)
     curves = list(lamp.animation_data.action.fcurves) + \
         list(world.node_tree.animation_data.action.fcurves)
     if lamp_data.animation_data:
@@ -430,7 +453,8 @@ def parse_args(argv):
     which.add_argument("--preset", choices=sorted(PRESETS))
     which.add_argument("--random", metavar="KEY",
                        help="a random scene of the suite (examples/random_scene.py): an "
-                            "integer seed, or a fixed member: "
+                            "integer seed, <kind><seed> for a kind in "
+                            + ", ".join(random_scene.PREFIXES) + ", or a fixed member: "
                             + ", ".join(sorted(random_scene.FIXED)))
     p.add_argument("--out", required=True)
     p.add_argument("--tiny", action="store_true",
@@ -600,6 +624,16 @@ def build_item(item, collection, mats):
         return [_cylinder(name, size[0], size[2], loc, collection, mats["green"])]
     if shape == "person":
         return [_cylinder(name, size[0], size[2], loc, collection, mats["cloth"], 12)]
+    if shape == "building":
+        # A flat-roofed block and the eaves slab over its walls.
+        o, roof_t = item["eaves"], random_scene.EAVES_THICKNESS_M
+        body = _box(name, (size[0], size[1], size[2] - roof_t), loc, rot, collection,
+                    mats["wall"])
+        roof = _box(name + "_eaves", (size[0] + 2 * o, size[1] + 2 * o, roof_t),
+                    (loc[0], loc[1], size[2] - roof_t), rot, collection, mats["dark"])
+        return [body, roof]
+    if shape == "tree":
+        return build_tree(item, collection, mats)
     if shape == "bush":
         bpy.ops.mesh.primitive_uv_sphere_add(radius=size[0],
                                              location=(loc[0], loc[1], 0.8 * size[0]))
@@ -609,6 +643,58 @@ def build_item(item, collection, mats):
         ob.data.materials.append(mats["green"])
         return [ob]
     raise ValueError(f"unknown shape {shape}")
+
+
+def leaf_material(seed):
+    """Foliage with gaps: a noise texture cuts the crown's shell into leaves
+    and holes (about half), so its shadow is dappled."""
+    mat = bpy.data.materials.new(f"leaves_{seed}")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    for n in list(nt.nodes):
+        if n.type != "OUTPUT_MATERIAL":
+            nt.nodes.remove(n)
+    coord = nt.nodes.new("ShaderNodeTexCoord")
+    noise = nt.nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 2.5
+    noise.inputs["Detail"].default_value = 4.0
+    noise.inputs["W"].default_value = float(seed)
+    noise.noise_dimensions = "4D"
+    ramp = nt.nodes.new("ShaderNodeValToRGB")
+    ramp.color_ramp.interpolation = "CONSTANT"
+    ramp.color_ramp.elements[1].position = 0.5
+    leaf = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    leaf.inputs["Color"].default_value = (0.06, 0.16, 0.04, 1.0)
+    hole = nt.nodes.new("ShaderNodeBsdfTransparent")
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    nt.links.new(coord.outputs["Object"], noise.inputs["Vector"])
+    nt.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
+    nt.links.new(ramp.outputs["Color"], mix.inputs["Fac"])
+    nt.links.new(hole.outputs["BSDF"], mix.inputs[1])
+    nt.links.new(leaf.outputs["BSDF"], mix.inputs[2])
+    nt.links.new(mix.outputs["Shader"], nt.nodes["Material Output"].inputs["Surface"])
+    return mat
+
+
+def build_tree(item, collection, mats):
+    """A trunk and a leafy crown of two shells (outer and inner), both cut
+    into leaves and holes."""
+    r, loc = item["size"][0], item["location"]
+    trunk = _cylinder(item["name"] + "_trunk", item["trunk_radius"],
+                      item["trunk_height"] + 0.5 * r, loc, collection, mats["bark"], 10)
+    leaves = leaf_material(item["leaf_seed"])
+    out = [trunk]
+    for k, radius in enumerate((r, 0.6 * r)):
+        bpy.ops.mesh.primitive_ico_sphere_add(
+            subdivisions=3, radius=radius,
+            location=(loc[0], loc[1], item["trunk_height"] + 0.8 * r))
+        ob = bpy.context.active_object
+        ob.name = f"{item['name']}_crown{k + 1}"
+        ob.scale = (1.0, 1.0, 0.8)
+        _link_only(ob, collection)
+        ob.data.materials.append(leaves)
+        out.append(ob)
+    return out
 
 
 def build_random_room(spec, model, mats):
@@ -644,6 +730,7 @@ def main_random(args, native):
                                  resolution=resolution)
     except ValueError as e:
         raise SystemExit(f"generate_scene: error: --random: {e}")
+    frames = spec["render"]["frames"]  # multi-day members have more
     if args.samples or args.tiny:
         spec["render"]["samples"] = args.samples or 4
     out = os.path.abspath(args.out)
@@ -664,6 +751,14 @@ def main_random(args, native):
     north = spec["north_offset_deg"]
     strength = [random_scene.sun_strength_factor(spec, i, suns[i][0]) for i in range(frames)]
     twilight = [random_scene.twilight_light(spec, z) for z, _ in suns]
+    overcast = None
+    if spec.get("overcast"):
+        # The flat sky's radiance: sky_level of the clear Sun's irradiance
+        # on the ground at the run's middle (a uniform sky L gives pi L).
+        o = spec["overcast"]
+        z_mid = suns[(o["first"] + o["last"]) // 2 - 1][0]
+        radiance = o["sky_level"] * SUN_STRENGTH * math.cos(math.radians(z_mid)) / math.pi
+        overcast = (radiance, [random_scene.overcast_sky(spec, i) for i in range(frames)])
 
     scene, model, extras = new_scene()
     g = spec["ground"]
@@ -673,7 +768,8 @@ def main_random(args, native):
             "wood": _principled("bench_wood", (0.35, 0.22, 0.12), roughness=0.7),
             "car": _principled("car_paint", (0.5, 0.05, 0.04), roughness=0.3),
             "cloth": _principled("cloth", (0.15, 0.15, 0.3), roughness=0.9),
-            "wall": _principled("plaster", (0.7, 0.68, 0.64), roughness=0.9)}
+            "wall": _principled("plaster", (0.7, 0.68, 0.64), roughness=0.9),
+            "bark": _principled("bark", (0.12, 0.08, 0.05), roughness=0.9)}
     ground_mat = ground_material(g["kind"], g["roughness"], g["specular"])
     if spec["kind"] == "room":
         r = spec["room"]
@@ -686,14 +782,14 @@ def main_random(args, native):
     else:
         # Far enough that every pixel sees ground (the drawer keeps the
         # horizon out of view within 70 m).
-        bpy.ops.mesh.primitive_plane_add(size=160.0)
+        bpy.ops.mesh.primitive_plane_add(size=400.0 if "urban" in spec else 160.0)
         ground = bpy.context.active_object
     ground.name = g["name"]
     _link_only(ground, model)
     ground.data.materials.append(ground_mat)
     for item in spec["casters"]:
         build_item(item, model, mats)
-    for item in spec["clutter"]:
+    for item in spec["clutter"] + spec.get("trees", []):
         build_item(item, extras, mats)
 
     cam = bpy.data.cameras.new("Camera")
@@ -710,7 +806,8 @@ def main_random(args, native):
     scene.render.resolution_percentage = 100
 
     lamp = add_sun_and_sky(scene, suns, north, strength_factors=strength, sky_importance=False,
-                           sky_factors=[t[0] for t in twilight] if "twilight" in spec else None)
+                           sky_factors=[t[0] for t in twilight]
+                           if random_scene.keyed_sky(spec) else None, overcast=overcast)
     exposure = spec.get("exposure_ev", 0.0)
     configure_render(scene, spec["render"]["samples"], exposure, frames, frames_dir)
     scene.cycles.seed = spec["render"].get("seed", 0)
@@ -721,11 +818,12 @@ def main_random(args, native):
             cam_obj.rotation_euler = [rest[k] + math.radians(off[k]) for k in range(3)]
             cam_obj.keyframe_insert("rotation_euler", frame=i + 1)
         cam_obj.rotation_euler = rest
-    if deg["exposure_drift"] or "twilight" in spec:
+    if deg["exposure_drift"] or random_scene.keyed_sky(spec) or spec.get("overcast"):
         scene["rest_exposure"] = exposure
         for i in range(frames):
             scene.view_settings.exposure = (exposure + random_scene.exposure_offset(spec, i)
-                                            + twilight[i][1])
+                                            + twilight[i][1]
+                                            + random_scene.overcast_exposure_ev(spec, i))
             scene.view_settings.keyframe_insert("exposure", frame=i + 1)
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "render.blend"))
     bpy.ops.render.render(animation=True)
@@ -759,7 +857,12 @@ def main_random(args, native):
                "random_scene": spec})
     trackfile.write_track(os.path.join(out, "truth.sun.json"), truth)
 
-    save_user_blend(scene, out, clip_path, lamp, extras)
+    if "rough_model" in spec:
+        save_user_blend(scene, out, clip_path, lamp, extras, "scene_true.blend")
+        roughen(spec, scene, model, mats)
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(out, "scene.blend"))
+    else:
+        save_user_blend(scene, out, clip_path, lamp, extras)
     print(f"generate_scene: random {spec['key']}: {frames} frames {width}x{height} -> {out}")
 
 
@@ -783,6 +886,8 @@ def render_masks(scene, ground, suns, north, mask_frames, masks_dir, strength_fa
     scene.world.node_tree.animation_data_clear()  # a twilight sky's keyed strength
     world_strength = scene.world.node_tree.nodes["Background"].inputs["Strength"]
     world_strength.default_value = 0.0
+    if "Overcast" in scene.world.node_tree.nodes:
+        scene.world.node_tree.nodes["Overcast"].inputs["Strength"].default_value = 0.0
     scene.cycles.max_bounces = 0
     scene.cycles.samples = 16
     scene.view_settings.view_transform = "Standard"
@@ -821,7 +926,26 @@ def render_masks(scene, ground, suns, north, mask_frames, masks_dir, strength_fa
     vl.material_override = None
 
 
-def save_user_blend(scene, out, clip_path, lamp, extras):
+def roughen(spec, scene, model, mats):
+    """The model as a user models it by hand (spec["rough_model"]): each
+    caster rebuilt moved, scaled and turned; the camera turned about an axis
+    and its focal length off."""
+    rough = spec["rough_model"]
+    ground = spec["ground"]["name"]
+    for ob in list(model.objects):
+        if ob.name != ground:
+            bpy.data.objects.remove(ob)
+    for item in spec["casters"]:
+        build_item(random_scene.rough_item(item, rough), model, mats)
+    cam = scene.camera
+    c = rough["camera"]
+    turn = Quaternion(Vector(c["axis"]), math.radians(c["angle_deg"]))
+    cam.rotation_euler = (turn @ cam.rotation_euler.to_quaternion()).to_euler(
+        "XYZ", cam.rotation_euler)
+    cam.data.lens *= c["lens_factor"]
+
+
+def save_user_blend(scene, out, clip_path, lamp, extras, name="scene.blend"):
     """Strips the render scene down to what a user would have."""
     bpy.data.objects.remove(lamp)
     # Shake and exposure drift belong to the footage, not to the matched
@@ -850,7 +974,7 @@ def save_user_blend(scene, out, clip_path, lamp, extras):
     scene.frame_start = clip.frame_start
     scene.frame_end = clip.frame_start + clip.frame_duration - 1
     scene.render.filepath = "//render/"
-    path = os.path.join(out, "scene.blend")
+    path = os.path.join(out, name)
     bpy.ops.wm.save_as_mainfile(filepath=path)
     bpy.ops.file.make_paths_relative()
     bpy.ops.wm.save_mainfile()

@@ -2,7 +2,10 @@
 
 bpy-free: the spec is a plain JSON-able dict that examples/generate_scene.py
 (`--random KEY`) turns into a render, and that bench/suite.py hashes into its
-cache key. KEY is an integer seed or the name of a fixed member (FIXED).
+cache key. KEY is an integer seed, the name of a fixed member (FIXED), or
+<prefix><seed> for a kind of member (PREFIXES: twilight, rough models,
+overcast runs, urban scenes, multi-day clips, trees), each drawn from its own
+random stream so that no kind changes another's scenes.
 
 The Sun comes from a `sun_position(y, m, d, h, mi, s, lat, lon) -> (zenith,
 azimuth)` callable (UTC; `_native.sun_position`), so drawing is exactly
@@ -40,6 +43,54 @@ TWILIGHT_PREFIX = "twilight"
 TWILIGHT_DEPTH_DEG = (3.0, 8.0)
 TWILIGHT_DAY_HOURS = (1.5, 4.0)
 HORIZON_FADE_DEG = 4.0
+# Keys "rough<seed>": the footage is rendered with the true model, the
+# user's scene.blend carries the model as a user models by hand: each caster
+# moved ROUGH_MOVE_M, scaled by ROUGH_SCALE per axis, turned up to
+# ROUGH_TURN_DEG; the camera turned ROUGH_CAMERA_DEG about a random axis and
+# its focal length off by ROUGH_LENS. scene_true.blend keeps the true model.
+ROUGH_PREFIX = "rough"
+ROUGH_MOVE_M = (0.05, 0.30)
+ROUGH_SCALE = (0.03, 0.10)
+ROUGH_TURN_DEG = 3.0
+ROUGH_CAMERA_DEG = 0.3
+ROUGH_LENS = 0.02
+# Keys "overcast<seed>": a run of OVERCAST_FRAMES frames inside the clip
+# under cloud: the Sun lamp off, the sky a flat grey giving
+# OVERCAST_SKY_LEVEL of the clear Sun's irradiance, over OVERCAST_RAMP
+# frames of transition each side; the camera's exposure ramps up as the
+# light falls (auto-exposure making up a share of it) and drifts slowly
+# over the whole clip.
+OVERCAST_PREFIX = "overcast"
+OVERCAST_FRAMES = (6, 12)
+OVERCAST_RAMP = (1, 3)
+OVERCAST_SKY_LEVEL = (0.15, 0.35)
+# Frames whose direct light is at most this share of the clear Sun's are
+# "without direct sunlight" (judged on their flag); below OVERCAST_JUDGED
+# they are not judged for accuracy either.
+NO_SUN_FACTOR = 0.05
+OVERCAST_JUDGED = 0.5
+# Keys "urban<seed>": buildings URBAN_HEIGHT_M tall with eaves, seen from a
+# camera that sees walls and ground; the Sun's shadows fall on walls.
+URBAN_PREFIX = "urban"
+URBAN_HEIGHT_M = (6.0, 20.0)
+# Keys "walls<seed>": the same streets seen from a camera 4-12 m up looking
+# across them at the facades: walls fill most of the view and the Sun's
+# shadows fall on walls more than on the ground.
+WALLS_PREFIX = "walls"
+# Keys "multiday<seed>": MULTIDAY_DAYS days with the nights in them, frames
+# at a fixed interval (as a webcam), 1.5 times the suite's frames; the times
+# are given to the estimator. The night sky dims as twilight's does; the
+# camera's exposure makes up at most MULTIDAY_MAX_GAIN_EV.
+MULTIDAY_PREFIX = "multiday"
+MULTIDAY_DAYS = (2, 3)
+MULTIDAY_MAX_GAIN_EV = 3.0
+# Keys "trees<seed>": footage-only trees over the ground (not in the model)
+# whose leafy crowns cast dappled shadows.
+TREES_PREFIX = "trees"
+# Every prefix of a member kind; a key is <prefix><seed> (seeds plain: the
+# static members).
+PREFIXES = (TWILIGHT_PREFIX, ROUGH_PREFIX, OVERCAST_PREFIX, URBAN_PREFIX, MULTIDAY_PREFIX,
+            TREES_PREFIX, WALLS_PREFIX)
 
 GROUNDS = ["paving", "asphalt", "grass", "wood", "cobbles"]
 CASTER_SHAPES = ["pole", "box", "wall", "kiosk", "lshape", "cylinder"]
@@ -205,6 +256,33 @@ def _draw_twilight_time(rng, sun_position, frames):
     raise RuntimeError("could not draw a twilight window")
 
 
+def _draw_multiday_time(rng, sun_position, frames):
+    """A place, a date and MULTIDAY_DAYS days from a random time of day,
+    frames at a fixed interval (a webcam's): nights in them, every day's
+    Sun high enough for shadows in view, never overhead."""
+    for _ in range(400):
+        lat, lon, utc, day, tz = _draw_day(rng, (-55.0, 60.0))
+        days = rng.randint(*MULTIDAY_DAYS)
+        step = round(days * 24 * 60 / frames)
+        start = dt.datetime(day.year, day.month, day.day, tzinfo=tz) + \
+            dt.timedelta(minutes=rng.randrange(0, 24 * 60, 5))
+        suns = [_sun(sun_position, start + dt.timedelta(minutes=i * step), lat, lon)
+                for i in range(frames)]
+        zeniths = [z for z, _ in suns]
+        if min(zeniths) < MIN_ZENITH_DEG or min(zeniths) >= MAX_ZENITH_DEG - 10.0:
+            continue  # overhead, or too low a Sun for shadows in view
+        if max(zeniths) < 96.0 or sum(z > 90.0 for z in zeniths) < frames // 5:
+            continue  # no real night (high latitudes in summer)
+        if sum(z < MAX_ZENITH_DEG for z in zeniths) < frames // 4:
+            continue
+        result = dict(place={"latitude_deg": round(lat, 4), "longitude_deg": round(lon, 4)},
+                      time={"start_local": start.replace(tzinfo=None).isoformat(),
+                            "utc_offset_h": utc, "minutes_per_frame": float(step)},
+                      multiday={"days": days, "times_given": True})
+        return result, suns
+    raise RuntimeError("could not draw a multi-day window")
+
+
 def _draw_time(rng, sun_position, frames, hours_range, ok):
     """A place, a date and a window of `hours_range` hours whose Sun stays
     below MAX_ZENITH_DEG and satisfies ok(suns_world_fn)."""
@@ -243,7 +321,7 @@ def _footprint_radius(item):
     s = item["size"]
     if item["shape"] == "lshape":
         return math.hypot(s[0], s[1])
-    if item["shape"] in ("cylinder", "bush", "bin", "person"):
+    if item["shape"] in ("cylinder", "bush", "bin", "person", "tree"):
         return s[0]
     return 0.5 * math.hypot(s[0], s[1])
 
@@ -336,9 +414,15 @@ def _place(rng, cam, item, placed, suns_world, tries=300):
     return False
 
 
-def _draw_outdoor(rng, sun_position, frames, resolution, twilight=False):
-    t, suns = _draw_twilight_time(rng, sun_position, frames) if twilight else \
-        _draw_time(rng, sun_position, frames, (1.0, 8.0), lambda s: True)
+def _draw_outdoor(rng, sun_position, frames, resolution, when="day"):
+    """An outdoor scene over a day's window ("day"), into twilight
+    ("twilight") or over several days ("multiday")."""
+    if when == "twilight":
+        t, suns = _draw_twilight_time(rng, sun_position, frames)
+    elif when == "multiday":
+        t, suns = _draw_multiday_time(rng, sun_position, frames)
+    else:
+        t, suns = _draw_time(rng, sun_position, frames, (1.0, 8.0), lambda s: True)
     north = round(rng.uniform(-180.0, 180.0), 2)
     width, height = resolution
     for _ in range(500):
@@ -523,6 +607,349 @@ def _draw_room(rng, sun_position, frames, resolution):
 
 
 # ---------------------------------------------------------------------------
+# Urban scenes: buildings with eaves (keys "urban<seed>")
+
+EAVES_THICKNESS_M = 0.3
+
+
+def building_boxes(item):
+    """The oriented boxes of a building caster (its body and the eaves slab
+    on top): dicts of center (x, y), half (x, y), z (low, high), rot (deg)."""
+    w, d, h = item["size"]
+    o = item["eaves"]
+    c = item["location"][:2]
+    rot = item["rotation_z_deg"]
+    return [{"center": c, "half": [w / 2, d / 2], "z": [0.0, h - EAVES_THICKNESS_M], "rot": rot},
+            {"center": c, "half": [w / 2 + o, d / 2 + o], "z": [h - EAVES_THICKNESS_M, h],
+             "rot": rot}]
+
+
+def box_hit(origin, direction, box):
+    """(t, normal) where the ray origin + t direction enters the oriented
+    box (normal in world, outward), or None. t is 0 (normal None) when the
+    origin is inside."""
+    a = math.radians(box["rot"])
+    c, s = math.cos(a), math.sin(a)
+    px, py = origin[0] - box["center"][0], origin[1] - box["center"][1]
+    lo = [c * px + s * py, -s * px + c * py, origin[2]]
+    ld = [c * direction[0] + s * direction[1], -s * direction[0] + c * direction[1],
+          direction[2]]
+    lim = [(-box["half"][0], box["half"][0]), (-box["half"][1], box["half"][1]), tuple(box["z"])]
+    t0, t1, axis, sign = -math.inf, math.inf, None, 0.0
+    for k in range(3):
+        if abs(ld[k]) < 1e-12:
+            if not lim[k][0] <= lo[k] <= lim[k][1]:
+                return None
+            continue
+        ta, tb = (lim[k][0] - lo[k]) / ld[k], (lim[k][1] - lo[k]) / ld[k]
+        sgn = -1.0 if ta < tb else 1.0
+        if ta > tb:
+            ta, tb = tb, ta
+        if ta > t0:
+            t0, axis, sign = ta, k, sgn
+        t1 = min(t1, tb)
+    if t0 > t1 or t1 < 1e-6:
+        return None
+    if t0 < 1e-6:
+        return 0.0, None
+    n = [0.0, 0.0, 0.0]
+    n[axis] = sign
+    return t0, [c * n[0] - s * n[1], s * n[0] + c * n[1], n[2]]
+
+
+def _first_hit(origin, direction, boxes):
+    best = None
+    for b in boxes:
+        h = box_hit(origin, direction, b)
+        if h is not None and (best is None or h[0] < best[0]):
+            best = h
+    return best
+
+
+def urban_view(spec, sun_position, grid=(32, 18)):
+    """What the camera sees over a grid of pixels, and per check frame what
+    is in the Sun's shadow: {"ground", "wall", "roof": shares of pixels;
+    "frames": per check frame {"wall_shadow": share of pixels on walls that
+    face the Sun but lie in a cast shadow, "ground_shadow", "ground_lit"}}."""
+    cam = camera_of(spec)
+    boxes = [b for item in spec["casters"] for b in building_boxes(item)]
+    points = []  # (kind, point, normal)
+    gw, gh = grid
+    for j in range(gh):
+        for i in range(gw):
+            x, y = (i + 0.5) / gw * cam.width, (j + 0.5) / gh * cam.height
+            d = [cam.forward[k] + ((x - cam.width / 2.0) * cam.right[k]
+                                   - (y - cam.height / 2.0) * cam.up[k]) / cam.f_px
+                 for k in range(3)]
+            hit = _first_hit(cam.location, d, boxes)
+            t_ground = -cam.location[2] / d[2] if d[2] < -1e-9 else math.inf
+            if hit is not None and hit[0] < t_ground:
+                if hit[1] is None:
+                    return None  # the camera is inside a building
+                p = [cam.location[k] + hit[0] * d[k] for k in range(3)]
+                points.append(("roof" if abs(hit[1][2]) > 0.5 else "wall", p, hit[1]))
+            elif t_ground < math.inf:
+                p = [cam.location[k] + t_ground * d[k] for k in range(3)]
+                points.append(("ground", p, [0.0, 0.0, 1.0]))
+    n = float(gw * gh)
+    out = {k: sum(q[0] == k for q in points) / n for k in ("ground", "wall", "roof")}
+    suns = suns_of(spec, sun_position)
+    out["frames"] = []
+    for f in check_frames(len(suns), suns):
+        s = sun_in_world(suns[f][0], suns[f][1] + spec["north_offset_deg"])
+        counts = {"wall_shadow": 0, "wall_lit": 0, "ground_shadow": 0, "ground_lit": 0}
+        for kind, p, normal in points:
+            if kind == "roof" or _dot(normal, s) <= 0.0:
+                continue
+            q = [p[k] + 0.02 * normal[k] for k in range(3)]
+            shadowed = _first_hit(q, s, boxes) is not None
+            if kind == "wall":
+                counts["wall_" + ("shadow" if shadowed else "lit")] += 1
+            else:
+                counts["ground_" + ("shadow" if shadowed else "lit")] += 1
+        out["frames"].append({k: v / n for k, v in counts.items()})
+    return out
+
+
+def _urban_view_ok(view):
+    return (view is not None and view["ground"] >= 0.2 and view["wall"] >= 0.12 and
+            all(f["wall_shadow"] >= 0.015 and f["ground_shadow"] >= 0.04 and
+                f["ground_lit"] >= 0.08 for f in view["frames"]))
+
+
+def _walls_view_ok(view):
+    return (view is not None and view["ground"] >= 0.08 and view["wall"] >= 0.45 and
+            all(f["wall_shadow"] >= 0.06 and f["wall_lit"] >= 0.06 and
+                f["wall_shadow"] >= f["ground_shadow"] for f in view["frames"]))
+
+
+# How the camera sees the streets: urban (from above: walls and ground) and
+# walls (from low across the street: mostly facades).
+URBAN_VIEWS = {
+    URBAN_PREFIX: dict(height_m=(12.0, 45.0), lens_mm=(18.0, 35.0), depression_deg=(22.0, 55.0),
+                       view_width_m=(25.0, 90.0), ok=_urban_view_ok),
+    WALLS_PREFIX: dict(height_m=(4.0, 12.0), lens_mm=(28.0, 50.0), depression_deg=(10.0, 35.0),
+                       view_width_m=(12.0, 45.0), ok=_walls_view_ok),
+}
+
+
+def _inside_footprint(p, item, margin):
+    a = math.radians(item["rotation_z_deg"])
+    px, py = p[0] - item["location"][0], p[1] - item["location"][1]
+    u, v = math.cos(a) * px + math.sin(a) * py, -math.sin(a) * px + math.cos(a) * py
+    eaves = item.get("eaves", 0.0)
+    w, d = item["size"][0] / 2 + eaves, item["size"][1] / 2 + eaves
+    return abs(u) < w + margin and abs(v) < d + margin
+
+
+def _draw_urban(rng, sun_position, frames, resolution, view=URBAN_PREFIX):
+    """Two to four buildings URBAN_HEIGHT_M tall with eaves on a street grid.
+    view "urban": seen from a camera 12-45 m up that sees walls and ground;
+    on the first, middle and last frame some walls that face the Sun lie in
+    a building's shadow, and the ground shows shadow and sunlight. view
+    "walls": from 4-12 m up across the street, walls fill most of the view,
+    some lit and some in a building's shadow, more shadow on walls than on
+    the ground (URBAN_VIEWS)."""
+    how = URBAN_VIEWS[view]
+    t, suns = _draw_time(rng, sun_position, frames, (1.0, 6.0), lambda s: True)
+    north = round(rng.uniform(-180.0, 180.0), 2)
+    width, height = resolution
+    for _ in range(60 if view == URBAN_PREFIX else 300):
+        height_m = rng.uniform(*how["height_m"])
+        lens = rng.uniform(*how["lens_mm"])
+        depression = rng.uniform(*how["depression_deg"])
+        vfov_half = math.degrees(math.atan(SENSOR_WIDTH_MM * height / width / 2.0 / lens))
+        if depression - vfov_half < 4.0:
+            continue
+        dist_h = height_m / math.tan(math.radians(depression))
+        slant = math.hypot(height_m, dist_h)
+        if not how["view_width_m"][0] <= slant * SENSOR_WIDTH_MM / lens <= how["view_width_m"][1]:
+            continue
+        yaw = rng.uniform(0.0, 360.0)
+        loc = [dist_h * math.sin(math.radians(yaw)), dist_h * math.cos(math.radians(yaw)),
+               height_m]
+        spec = dict(kind="outdoor", **t, north_offset_deg=north,
+                    camera={"location": [round(v, 4) for v in loc], "target": [0.0, 0.0, 0.0],
+                            "lens_mm": round(lens, 2)},
+                    render={"frames": frames, "resolution": list(resolution), "samples": 8},
+                    urban={"buildings": 0} if view == URBAN_PREFIX else
+                    {"buildings": 0, "view": view})
+        cam = camera_of(spec)
+        corners = [cam.ground_point(x, 0.0) for x in (0.0, float(width))]
+        if any(c is None or math.hypot(c[0], c[1]) > 150.0 for c in corners):
+            continue
+        base = rng.uniform(0.0, 90.0)
+        casters = []
+        for k in range(rng.randint(2, 4)):
+            w, d = rng.uniform(6.0, 14.0), rng.uniform(6.0, 14.0)
+            item = dict(shape="building", name=f"Building{k + 1}",
+                        size=[round(w, 3), round(d, 3), round(rng.uniform(*URBAN_HEIGHT_M), 3)],
+                        eaves=round(rng.uniform(0.4, 1.0), 3),
+                        rotation_z_deg=round(base + rng.choice((0.0, 90.0)), 2))
+            for _ in range(100):
+                g = cam.ground_point(rng.uniform(0.1, 0.9) * width, rng.uniform(0.3, 0.9) * height)
+                if g is None:
+                    continue
+                item["location"] = [round(g[0], 3), round(g[1], 3), 0.0]
+                # A street (at least 4 m) between buildings; the camera outside.
+                if any(_overlap(item, q, 4.0) for q in casters) or \
+                        _inside_footprint(loc, item, 3.0):
+                    continue
+                casters.append(item)
+                break
+        if len(casters) < 2:
+            continue
+        spec.update(casters=casters)
+        spec["urban"]["buildings"] = len(casters)
+        if how["ok"](urban_view(spec, sun_position)):
+            break
+    else:
+        return None
+    clutter = []
+    for k in range(rng.randint(2, 5)):
+        kind = rng.choice(["car", "person", "bin", "bench"])
+        item = dict(shape=kind, name=f"Clutter{k + 1}_{kind}", size=_draw_clutter(rng, kind),
+                    rotation_z_deg=round(base + rng.choice((0.0, 90.0)), 2))
+        for _ in range(200):
+            g = cam.ground_point(rng.uniform(0.05, 0.95) * width, rng.uniform(0.1, 0.95) * height)
+            if g is None or any(_inside_footprint(g, q, 2.0) for q in casters):
+                continue
+            if all(math.hypot(g[0] - q["location"][0], g[1] - q["location"][1])
+                   > _footprint_radius(item) + _footprint_radius(q) + 0.4 for q in clutter):
+                item["location"] = [round(g[0], 3), round(g[1], 3), 0.0]
+                clutter.append(item)
+                break
+    spec.update(clutter=clutter,
+                ground={"kind": rng.choice(["paving", "asphalt", "cobbles"]), "name": "Ground",
+                        "roughness": round(rng.uniform(0.55, 1.0), 3),
+                        "specular": round(rng.uniform(0.2, 0.5), 3)})
+    return spec
+
+
+def _overlap(a, b, gap):
+    """Whether two buildings on the same street grid (rotations differing by
+    a multiple of 90 deg) come closer than `gap` metres."""
+    base = math.radians(a["rotation_z_deg"])
+    c, s = math.cos(base), math.sin(base)
+
+    def half(item):
+        turned = round((item["rotation_z_deg"] - a["rotation_z_deg"]) / 90.0) % 2
+        w, d = item["size"][0] / 2 + item["eaves"], item["size"][1] / 2 + item["eaves"]
+        return (d, w) if turned else (w, d)
+    dx, dy = b["location"][0] - a["location"][0], b["location"][1] - a["location"][1]
+    u, v = c * dx + s * dy, -s * dx + c * dy
+    (aw, ad), (bw, bd) = half(a), half(b)
+    return abs(u) < aw + bw + gap and abs(v) < ad + bd + gap
+
+
+# ---------------------------------------------------------------------------
+# Rough models (keys "rough<seed>")
+
+def _draw_rough(rng, spec):
+    """How the user's hand-made model differs from the true one."""
+    casters = []
+    for c in spec["casters"]:
+        r, a = rng.uniform(*ROUGH_MOVE_M), rng.uniform(0.0, 2 * math.pi)
+        casters.append({"name": c["name"],
+                        "move_m": [round(r * math.cos(a), 4), round(r * math.sin(a), 4)],
+                        "scale": [round(1.0 + rng.choice((-1.0, 1.0)) * rng.uniform(*ROUGH_SCALE),
+                                        4) for _ in range(3)],
+                        "turn_deg": round(rng.uniform(-ROUGH_TURN_DEG, ROUGH_TURN_DEG), 3)})
+    axis = _unit([rng.gauss(0.0, 1.0) for _ in range(3)])
+    return {"casters": casters,
+            "camera": {"axis": [round(v, 5) for v in axis], "angle_deg": ROUGH_CAMERA_DEG,
+                       "lens_factor": round(1.0 + rng.choice((-1.0, 1.0)) * ROUGH_LENS, 4)}}
+
+
+def rough_item(item, rough):
+    """The caster as the user modelled it (spec["rough_model"])."""
+    r = next(c for c in rough["casters"] if c["name"] == item["name"])
+    out = dict(item)
+    out["location"] = [item["location"][0] + r["move_m"][0],
+                       item["location"][1] + r["move_m"][1], item["location"][2]]
+    out["size"] = [v * k for v, k in zip(item["size"], r["scale"])]
+    out["rotation_z_deg"] = item["rotation_z_deg"] + r["turn_deg"]
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Overcast stretches and exposure ramps (keys "overcast<seed>")
+
+def _draw_overcast(rng, frames):
+    ramp = rng.randint(*OVERCAST_RAMP)
+    margin = min(5 + ramp, max(0, (frames - 1) // 3))
+    n = max(1, min(rng.randint(*OVERCAST_FRAMES), frames - 2 * margin))
+    first = rng.randint(margin + 1, max(margin + 1, frames - margin - n + 1))
+    return {"first": first, "last": min(frames, first + n - 1), "ramp_frames": ramp,
+            "sky_level": round(rng.uniform(*OVERCAST_SKY_LEVEL), 3),
+            "exposure_gain": round(rng.uniform(0.4, 0.8), 3),
+            "exposure_ramp_ev": round(rng.choice((-1.0, 1.0)) * rng.uniform(0.3, 1.0), 3)}
+
+
+def overcast_factor(spec, frame_index):
+    """The share of the clear Sun's direct light that the cloud lets
+    through on a frame (0-based): 0 in the overcast run, 1 outside it, a
+    smooth ramp between (1 in scenes without an overcast run)."""
+    o = spec.get("overcast")
+    if not o:
+        return 1.0
+    f = frame_index + 1
+    if o["first"] <= f <= o["last"]:
+        return 0.0
+    d = o["first"] - f if f < o["first"] else f - o["last"]
+    return _smoothstep(0.0, 1.0, d / (o["ramp_frames"] + 1.0))
+
+
+def no_direct_sun(spec, frame_index, zenith_deg):
+    """Whether a frame has no direct sunlight in the footage, by
+    construction: the Sun below the horizon, or an overcast frame."""
+    return zenith_deg > 90.0 or overcast_factor(spec, frame_index) <= NO_SUN_FACTOR
+
+
+def judged(spec, frame_index, zenith_deg, judged_max_zenith_deg):
+    """Whether a frame is judged on its Sun's accuracy: the Sun high enough
+    and the cloud letting most of it through."""
+    return zenith_deg <= judged_max_zenith_deg and \
+        overcast_factor(spec, frame_index) >= OVERCAST_JUDGED
+
+
+# ---------------------------------------------------------------------------
+# Trees over the ground (keys "trees<seed>"), footage only
+
+def _draw_trees(rng, spec, sun_position):
+    """One to three trees whose crowns' shadows fall in view on the first,
+    middle and last frame; clear of the casters."""
+    cam = camera_of(spec)
+    suns = suns_of(spec, sun_position)
+    north = spec["north_offset_deg"]
+    suns_world = [sun_in_world(suns[i][0], suns[i][1] + north)
+                  for i in check_frames(len(suns), suns)]
+    trees = []
+    for k in range(rng.randint(1, 3)):
+        r = rng.uniform(1.2, 2.4)
+        item = dict(shape="tree", name=f"Tree{k + 1}", size=[round(r, 3), 0.0, 0.0],
+                    trunk_radius=round(rng.uniform(0.1, 0.2), 3),
+                    trunk_height=round(rng.uniform(1.8, 3.2), 3),
+                    leaf_seed=rng.randrange(1000), rotation_z_deg=0.0)
+        crown_z = item["trunk_height"] + 0.8 * r
+        for _ in range(200):
+            g = cam.ground_point(rng.uniform(0.1, 0.9) * cam.width,
+                                 rng.uniform(0.25, 0.9) * cam.height)
+            if g is None or not cam.in_view(g, 0.06):
+                continue
+            if any(math.hypot(g[0] - q["location"][0], g[1] - q["location"][1])
+                   < r + _footprint_radius(q) + 0.3 for q in spec["casters"] + trees):
+                continue
+            shadows = [[g[0] - crown_z / s[2] * s[0], g[1] - crown_z / s[2] * s[1], 0.0]
+                       for s in suns_world]
+            if all(cam.in_view(p, 0.05) for p in shadows):
+                item["location"] = [round(g[0], 3), round(g[1], 3), 0.0]
+                trees.append(item)
+                break
+    return trees
+
+
+# ---------------------------------------------------------------------------
 # Footage degradations
 
 def _draw_degradations(rng, frames):
@@ -555,18 +982,46 @@ def horizon_factor(zenith_deg):
 def twilight_light(spec, zenith_deg):
     """(sky strength factor, camera exposure offset in EV) at a Sun's
     zenith: the sky dims by half an EV a degree below the horizon and an
-    auto-exposing camera makes up three quarters of it; 1 and 0 in scenes
-    without twilight and while the Sun is up."""
-    if "twilight" not in spec:
+    auto-exposing camera makes up three quarters of it (at most
+    MULTIDAY_MAX_GAIN_EV over a whole night); 1 and 0 in scenes without
+    twilight or nights and while the Sun is up."""
+    if "twilight" not in spec and "multiday" not in spec:
         return 1.0, 0.0
     below_ev = 0.5 * max(0.0, zenith_deg - 90.0)
-    return 2.0 ** -below_ev, 0.75 * below_ev
+    gain = 0.75 * below_ev
+    if "multiday" in spec:
+        gain = min(gain, MULTIDAY_MAX_GAIN_EV)
+    return 2.0 ** -below_ev, gain
+
+
+def keyed_sky(spec):
+    """Whether the sky's strength changes over the clip (twilight, nights)."""
+    return "twilight" in spec or "multiday" in spec
+
+
+def overcast_sky(spec, frame_index):
+    """How much of the sky is the overcast's flat grey (0 clear, 1 overcast)."""
+    return 1.0 - overcast_factor(spec, frame_index)
+
+
+def overcast_exposure_ev(spec, frame_index):
+    """The overcast members' exposure: the camera makes up a share of the
+    light the cloud takes, and the exposure ramps linearly over the clip."""
+    o = spec.get("overcast")
+    if not o:
+        return 0.0
+    n = spec["render"]["frames"]
+    gain = o["exposure_gain"] * math.log2(1.0 / o["sky_level"]) * overcast_sky(spec, frame_index)
+    return gain + o["exposure_ramp_ev"] * (frame_index / max(1, n - 1) - 0.5)
 
 
 def sun_strength_factor(spec, frame_index, zenith_deg=None):
-    """Clouds: the Sun's strength dips smoothly (1 = clear); and fades at
-    the horizon (horizon_factor) when the Sun's zenith is given."""
+    """Clouds: the Sun's strength dips smoothly (1 = clear), and is off
+    through an overcast run (overcast_factor); and fades at the horizon
+    (horizon_factor) when the Sun's zenith is given."""
     f = 1.0 if zenith_deg is None else horizon_factor(zenith_deg)
+    if spec.get("overcast"):
+        f *= overcast_factor(spec, frame_index)
     for c in spec["degradations"]["clouds"]:
         x = (frame_index + 1 - c["frame"]) / max(c["width_frames"] / 2.0, 0.5)
         f *= 1.0 - c["depth"] * math.exp(-x * x)
@@ -634,28 +1089,49 @@ FIXED = {
 }
 
 
+def split_key(key):
+    """(prefix, rest) of a member's key: prefix one of PREFIXES, or "" for
+    the static members (seeds and FIXED)."""
+    for prefix in PREFIXES:
+        if key.startswith(prefix):
+            return prefix, key[len(prefix):]
+    return "", key
+
+
 def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION):
-    """The scene spec for `key`: an integer seed or a name in FIXED."""
+    """The scene spec for `key`: an integer seed, <prefix><seed> for a
+    prefix in PREFIXES, or a name in FIXED. Multi-day members have 1.5 times
+    `frames`."""
     key = str(key)
-    twilight = key.startswith(TWILIGHT_PREFIX)
+    prefix, rest = split_key(key)
     if key in FIXED:
         spec = _plaza14(key, sun_position=sun_position, frames=frames,
                         resolution=resolution, **FIXED[key])
     else:
         try:
-            seed = int(key[len(TWILIGHT_PREFIX):] if twilight else key)
+            seed = int(rest)
         except ValueError:
-            raise ValueError(f"scene key must be an integer seed, {TWILIGHT_PREFIX}<seed> or "
-                             f"one of {', '.join(sorted(FIXED))}, got '{key}'") from None
-        # Twilight members draw from their own stream (not seed N's scene).
-        rng = random.Random(f"{TWILIGHT_PREFIX}-{seed}" if twilight else seed)
-        room = not twilight and seed % ROOM_EVERY == ROOM_EVERY - 1
+            raise ValueError(f"scene key must be an integer seed, <kind><seed> for a kind in "
+                             f"{', '.join(PREFIXES)}, or one of {', '.join(sorted(FIXED))}, "
+                             f"got '{key}'") from None
+        # Members of a kind draw from their own stream (not seed N's scene).
+        rng = random.Random(f"{prefix}-{seed}" if prefix else seed)
+        room = not prefix and seed % ROOM_EVERY == ROOM_EVERY - 1
+        if prefix == MULTIDAY_PREFIX:
+            frames = frames * 3 // 2
+        when = {TWILIGHT_PREFIX: "twilight", MULTIDAY_PREFIX: "multiday"}.get(prefix, "day")
         spec = None
         for _ in range(20):  # an unlucky draw (no caster fits) draws again
             if room:
                 spec = _draw_room(rng, sun_position, frames, tuple(resolution))
+            elif prefix in URBAN_VIEWS:
+                spec = _draw_urban(rng, sun_position, frames, tuple(resolution), prefix)
             else:
-                spec = _draw_outdoor(rng, sun_position, frames, tuple(resolution), twilight)
+                spec = _draw_outdoor(rng, sun_position, frames, tuple(resolution), when)
+            if spec is not None and prefix == TREES_PREFIX:
+                spec["trees"] = _draw_trees(rng, spec, sun_position)
+                if not spec["trees"]:
+                    spec = None  # no tree's shadow fits in this view
             if spec is not None:
                 break
         if spec is None:
@@ -663,6 +1139,12 @@ def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION
         spec["key"] = key
         spec["degradations"] = _draw_degradations(rng, frames)
         spec["render"]["seed"] = seed
+        if prefix == ROUGH_PREFIX:
+            spec["rough_model"] = _draw_rough(rng, spec)
+        elif prefix == OVERCAST_PREFIX:
+            spec["overcast"] = _draw_overcast(rng, frames)
+            # The run is the cloud and the ramp the exposure's change.
+            spec["degradations"].update(clouds=[], exposure_drift=None)
     spec["generator_version"] = GENERATOR_VERSION
     return spec
 
@@ -678,6 +1160,15 @@ def describe(spec):
                              ("shake", deg["shake_deg"])) if on]
     if "twilight" in spec:
         flags.insert(0, spec["twilight"]["side"])
+    if "rough_model" in spec:
+        flags.insert(0, "rough")
+    if spec.get("overcast"):
+        o = spec["overcast"]
+        flags.insert(0, f"overcast {o['first']}-{o['last']}")
+    if "multiday" in spec:
+        flags.insert(0, f"{spec['multiday']['days']} days")
+    if spec.get("trees"):
+        flags.insert(0, f"{len(spec['trees'])} trees")
     return (f"{spec['kind']} lat {p['latitude_deg']:.1f} lon {p['longitude_deg']:.1f} "
             f"{t['start_local'][:16]} {hours:.1f}h N{spec['north_offset_deg']:+.0f} "
             f"cam {cam['location'][2]:.1f}m {cam['lens_mm']:.0f}mm {spec['ground']['kind']} "

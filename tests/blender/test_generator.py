@@ -204,3 +204,77 @@ def test_random_scene_shadows_are_in_view(random_generated, native):
             for item in spec["casters"]:
                 mid = random_scene.shadow_points(item, sun)[1]
                 assert near(mid).any(), (frame, item["name"])
+
+
+# ---------------------------------------------------------------------------
+# The kinds real footage brings (issue 25 item 7): a rough model beside the
+# true one, and the footage-only trees and the overcast sky kept out of the
+# user's scene.
+
+@pytest.fixture(scope="module")
+def rough_generated(tmp_path_factory):
+    out = str(tmp_path_factory.mktemp("rough1"))
+    cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
+           "--python", os.path.join(os.path.dirname(random_scene.__file__), "generate_scene.py"),
+           "--", "--random", "rough1", "--out", out, "--tiny", "--mask-frames", "1"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+
+
+def _model_and_camera(path):
+    bpy.ops.wm.open_mainfile(filepath=path)
+    cam = bpy.context.scene.camera
+    model = {o.name: (np.array(o.matrix_world.translation), np.array(o.dimensions),
+                      math.degrees(o.rotation_euler.z))
+             for o in bpy.data.collections["Model"].objects}
+    return model, cam.matrix_world.to_quaternion(), cam.data.lens
+
+
+def test_rough_member_carries_the_hand_made_model_beside_the_true_one(rough_generated):
+    out, truth = rough_generated
+    spec = truth.extra["random_scene"]
+    true_model, true_cam, true_lens = _model_and_camera(os.path.join(out, "scene_true.blend"))
+    rough_model, rough_cam, rough_lens = _model_and_camera(os.path.join(out, "scene.blend"))
+    assert set(true_model) == set(rough_model)
+    for item in spec["casters"]:
+        want = random_scene.rough_item(item, spec["rough_model"])
+        loc, dims, turn = rough_model[item["name"]]
+        assert loc[:2] == pytest.approx(want["location"][:2], abs=1e-3)
+        assert loc[:2] != pytest.approx(true_model[item["name"]][0][:2], abs=0.04)
+        assert dims[2] == pytest.approx(want["size"][2], rel=1e-3)
+    assert math.degrees(true_cam.rotation_difference(rough_cam).angle) == pytest.approx(
+        random_scene.ROUGH_CAMERA_DEG, abs=0.01)
+    assert rough_lens / true_lens == pytest.approx(spec["rough_model"]["camera"]["lens_factor"])
+
+
+@pytest.fixture(scope="module", params=["trees1", "overcast1"])
+def kind_generated(request, tmp_path_factory):
+    key = request.param
+    out = str(tmp_path_factory.mktemp(key))
+    cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
+           "--python", os.path.join(os.path.dirname(random_scene.__file__), "generate_scene.py"),
+           "--", "--random", key, "--out", out, "--tiny", "--mask-frames", "1"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return key, out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+
+
+def test_trees_and_overcast_sky_stay_out_of_the_users_scene(kind_generated):
+    key, out, truth = kind_generated
+    spec = truth.extra["random_scene"]
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(out, "render.blend"))
+    if spec.get("trees"):
+        crowns = [o.name for o in bpy.data.collections["FootageOnly"].objects
+                  if "_crown" in o.name]
+        assert len(crowns) == 2 * len(spec["trees"])
+        assert set(crowns) <= set(truth.extra["footage_only_objects"])
+    if spec.get("overcast"):
+        nodes = bpy.context.scene.world.node_tree.nodes
+        assert "Overcast" in nodes and nodes["Overcast"].inputs["Strength"].default_value > 0
+        curves = bpy.context.scene.world.node_tree.animation_data.action.fcurves
+        assert any("Fac" in fc.data_path or "inputs[0]" in fc.data_path for fc in curves)
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(out, "scene.blend"))
+    names = {o.name for o in bpy.data.objects}
+    assert not names & set(truth.extra["footage_only_objects"])
+    assert bpy.context.scene.world is None
