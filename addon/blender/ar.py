@@ -490,9 +490,10 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
         if dark:
             figures.append(f"{dark} frame(s) without direct sunlight: the lamp off, the sky "
                            f"as bright as their ground")
-        for got, want in checked:
-            figures.append(f"the model's shadows rendered at R {got[0]:.2f} G {got[1]:.2f} "
-                           f"B {got[2]:.2f} for {want[0]:.2f}/{want[1]:.2f}/{want[2]:.2f}: "
+        if checked:
+            pairs = ", ".join(f"{'/'.join(f'{v:.2f}' for v in got)} for "
+                              f"{'/'.join(f'{v:.2f}' for v in want)}" for got, want in checked)
+            figures.append(f"the model's shadows rendered (R/G/B, for the footage's): {pairs}: "
                            f"corrected")
         if details is None:
             light = "; " + "; ".join(figures)
