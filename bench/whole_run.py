@@ -20,6 +20,9 @@ For each size in --sizes (--length frames each) and each 1080p length in
   decode-only  the add-on's own reader (_native.VideoReader) reading every
                frame and doing nothing else, frames/s (BGR, and gray when the
                reader has read_gray);
+  ffmpeg       `ffmpeg -i CLIP -f null -`: every frame decoded at full size,
+               once (what a user compares with; issue 28), and the estimate's
+               ratio to it;
   estimate     `blender -b --factory-startup SCENE.blend --python-exit-code 1
                --python examples/run_estimate.py -- --out T.json`, exactly as a
                user runs it: frames/s from the track's timing.total_s (the
@@ -83,6 +86,10 @@ TARGET_MEMORY_GROWTH = 0.10
 TARGET_FIRST_FRAME_S = 1.0
 # Issue 14: the whole estimate of a 120-frame 800x450 clip, whatever the scene.
 TARGET_SMALL_CLIP_S = 3.0
+# Issue 28: the whole estimate of 1080p H.264 against `ffmpeg -i CLIP -f null -`
+# (every frame decoded at full size, once: what a user compares with), by
+# clip length (frames): at least this ratio from that length on.
+TARGET_FFMPEG_1080 = ((300, 0.4), (1000, 0.6))
 
 # Re-saves a scene for a clip: render size = clip size, every movie clip
 # pointed at the clip; writes the clip's frame range to INFO (JSON).
@@ -416,6 +423,38 @@ def measure_decode(native, clip):
     return out
 
 
+def measure_ffmpeg(clip):
+    """{"seconds"} of `ffmpeg -i CLIP -f null -` (the best of two runs when
+    one is short, the first also warming the page cache), or None without
+    ffmpeg or when it fails."""
+    if shutil.which("ffmpeg") is None:
+        return None
+    best = None
+    for attempt in range(2):
+        t0 = time.perf_counter()
+        proc = subprocess.run(["ffmpeg", "-nostdin", "-loglevel", "error", "-i", clip,
+                               "-f", "null", "-"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+        seconds = time.perf_counter() - t0
+        if proc.returncode != 0:
+            return None
+        best = seconds if best is None else min(best, seconds)
+        if seconds > 5.0:
+            break
+    return {"seconds": best}
+
+
+def ffmpeg_figures(f, ffmpeg):
+    """The estimate's ratio to ffmpeg's decode (its throughput over ffmpeg's:
+    total_s, and the command's wall time) into figures f."""
+    if not ffmpeg or not f.get("frames"):
+        return
+    f["ffmpeg"] = dict(ffmpeg, fps=f["frames"] / ffmpeg["seconds"])
+    if f.get("total_s"):
+        f["ratio_ffmpeg"] = ffmpeg["seconds"] / f["total_s"]
+    f["ratio_ffmpeg_wall"] = ffmpeg["seconds"] / f["wall_s"]
+
+
 def reference_mode(decode):
     """The decode mode the ratio is taken against: gray when the reader has it
     (the estimate needs only gray pixels, and the faster reference is the
@@ -501,6 +540,10 @@ def print_clip(label, f):
     if "fps" in f:
         print(f"  estimate (total_s)  {f['fps']:8.1f} frames/s  ({f['total_s']:.2f} s)")
     print(f"  blender command     {f['wall_fps']:8.1f} frames/s  ({f['wall_s']:.2f} s wall)")
+    if f.get("ffmpeg"):
+        print(f"  ffmpeg -i ... -f null -  {f['ffmpeg']['fps']:8.1f} frames/s  "
+              f"({f['ffmpeg']['seconds']:.2f} s): the estimate {fmt(f.get('ratio_ffmpeg'))}x "
+              f"(wall {fmt(f.get('ratio_ffmpeg_wall'))}x)")
     if f.get("ratio") is not None:
         others = ", ".join(f"{m} {r:.2f}x" for m, r in f["ratios_by_mode"].items()
                            if m != f["decode_mode"])
@@ -544,6 +587,14 @@ def summary_lines(fig):
         if f.get("height") == 450 and f.get("total_s") is not None:
             rows.append((f"estimate <= {TARGET_SMALL_CLIP_S:g} s, {name} (issue 14)",
                          f"{f['total_s']:.2f} s", verdict(f["total_s"] <= TARGET_SMALL_CLIP_S)))
+    for name, f in list(fig["sizes"].items()) + list(fig["long"].items()):
+        if f.get("height") != 1080 or f.get("ratio_ffmpeg") is None:
+            continue
+        wanted = [r for n, r in TARGET_FFMPEG_1080 if f["frames"] >= n]
+        if wanted:
+            rows.append((f"estimate >= {wanted[-1]}x ffmpeg's decode (issue 28), {name}",
+                         f"{f['ratio_ffmpeg']:.2f}x (wall {fmt(f.get('ratio_ffmpeg_wall'))}x)",
+                         verdict(f["ratio_ffmpeg"] >= wanted[-1])))
     suite = fig.get("suite")
     if suite and suite.get("worst_ratio"):
         w = suite["worst_ratio"]
@@ -587,6 +638,7 @@ def measure_clip(native, args, scene_blend, frames, height, length, cache, failu
             print(f"  note: Blender sees {info.get('frame_duration')} frames in the clip",
                   flush=True)
         decode = measure_decode(native, clip)
+        ffmpeg = measure_ffmpeg(clip)
         est = measure_estimate(args.blender, blend, f"{size[0]}x{size[1]}-{length}-g{args.gop}",
                                cache)
     except BenchError as e:
@@ -594,6 +646,7 @@ def measure_clip(native, args, scene_blend, frames, height, length, cache, failu
         failures.append(f"{name}: {e}")
         return name, None
     f = figures_of(decode, est)
+    ffmpeg_figures(f, ffmpeg)
     f.update(height=height, clip=clip, blend=blend)
     print_clip(name, f)
     return name, f

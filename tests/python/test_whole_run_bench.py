@@ -109,3 +109,20 @@ def test_the_small_clip_row_judges_the_whole_estimate_against_three_seconds():
     assert row(3.5)[0][2] == "not met"
     assert whole_run.parse_sizes("450") == [450]
     assert 450 not in whole_run.DEFAULT_SIZES
+
+
+def test_1080p_is_judged_against_ffmpegs_decode_by_its_length():
+    """Issue 28: >= 0.4x ffmpeg's decode over 300 frames, >= 0.6x over 1,000."""
+    def rows(frames, ffmpeg_s, total_s):
+        f = {"height": 1080, "frames": frames, "wall_s": total_s + 1.0, "total_s": total_s}
+        whole_run.ffmpeg_figures(f, {"seconds": ffmpeg_s})
+        fig = {"sizes": {}, "long": {f"1920x1080, {frames} frames": f}}
+        return [r for r in whole_run.summary_lines(fig) if "ffmpeg" in r[0]]
+    assert rows(300, 1.25, 5.7) == [("estimate >= 0.4x ffmpeg's decode (issue 28), "
+                                     "1920x1080, 300 frames", "0.22x (wall 0.19x)", "not met")]
+    assert rows(1000, 4.0, 6.0)[0][0].startswith("estimate >= 0.6x") and \
+        rows(1000, 4.0, 6.0)[0][2] == "met"
+    assert rows(100, 1.0, 2.0) == []           # no target below 300 frames
+    bare = {"frames": 10, "wall_s": 2.0}
+    whole_run.ffmpeg_figures(bare, None)       # no ffmpeg: no figure, no row
+    assert "ffmpeg" not in bare
