@@ -33,8 +33,10 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             t2 = time.perf_counter()
             ground = job.ground_names(settings, model) or gather.guess_ground(model, cam)
             unseen = job.view_doubts(model, cam, scene_n, camera_n, ground)
-            moved = gather.camera_motion(context, settings.camera or context.scene.camera,
+            camera_obj = settings.camera or context.scene.camera
+            moved = gather.camera_motion(context, camera_obj,
                                          (clip.frame_start, clip.frame_end))
+            solve = gather.camera_solve(context, camera_obj)
         except (gather.SceneError, RuntimeError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -52,6 +54,12 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
         if moved is not None:
             doubts.append(f"the camera moves over the clip ({moved}): Estimate Sun needs a "
                           f"camera that stays put (set a Frame Range where it does)")
+        if solve is not None:
+            words, doubtful = solve
+            if doubtful:
+                doubts.append(words)
+            else:
+                msg += f"; {words}"
         if doubts:
             # A lone object (the default cube) casts its shadow on nothing
             # modelled: its own top was taken for the ground.

@@ -174,6 +174,40 @@ def test_a_moving_camera_is_told_not_estimated(empty_scene):
     assert "its lens by" in gather.camera_motion(bpy.context, cam, (1, 60))
 
 
+def test_check_scene_says_whether_the_camera_is_solved_and_how_well(empty_scene, tmp_path):
+    """Issue 26: a camera on Blender's Camera Solver constraint is reported
+    with its solve's error; no solve, no clip, or an error over a pixel is a
+    doubt."""
+    from types import SimpleNamespace as NS
+    from sunlapse.blender import gather
+    scene = empty_scene
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(cam)
+    assert gather.camera_solve(bpy.context, cam) is None          # no constraint
+    con = cam.constraints.new("CAMERA_SOLVER")
+    con.use_active_clip = False
+    words, doubtful = gather.camera_solve(bpy.context, cam)
+    assert doubtful and "Camera Solver constraint with no clip" in words, words
+    img = bpy.data.images.new("frame", 8, 8)
+    img.filepath_raw = str(tmp_path / "frame_0001.png")
+    img.file_format = "PNG"
+    img.save()
+    con.clip = bpy.data.movieclips.load(str(tmp_path / "frame_0001.png"))
+    words, doubtful = gather.camera_solve(bpy.context, cam)
+    assert doubtful and "has no camera solve yet" in words, words
+
+    def solved(error):
+        rec = NS(is_valid=True, average_error=error, cameras=[0] * 120)
+        clip = NS(name="shot", tracking=NS(reconstruction=rec))
+        obj = NS(name="Camera", constraints=[NS(type="CAMERA_SOLVER", use_active_clip=False,
+                                                 clip=clip)])
+        return gather.camera_solve(NS(scene=NS(active_clip=None)), obj)
+    words, doubtful = solved(0.31)
+    assert not doubtful and "120 frame(s), average error 0.31 px" in words, words
+    words, doubtful = solved(2.5)
+    assert doubtful and "over 1 px" in words, words
+
+
 def test_a_ground_out_of_view_is_named_in_a_warning(monkeypatch):
     from types import SimpleNamespace as NS
     from sunlapse.blender import gather, job
