@@ -199,8 +199,8 @@ def test_check_scene_says_whether_the_camera_is_solved_and_how_well(empty_scene,
     def solved(error):
         rec = NS(is_valid=True, average_error=error, cameras=[0] * 120)
         clip = NS(name="shot", tracking=NS(reconstruction=rec))
-        obj = NS(name="Camera", constraints=[NS(type="CAMERA_SOLVER", use_active_clip=False,
-                                                 clip=clip)])
+        solver = NS(type="CAMERA_SOLVER", use_active_clip=False, clip=clip)
+        obj = NS(name="Camera", constraints=[solver])
         return gather.camera_solve(NS(scene=NS(active_clip=None)), obj)
     words, doubtful = solved(0.31)
     assert not doubtful and "120 frame(s), average error 0.31 px" in words, words

@@ -134,16 +134,21 @@ def test_shadow_check_rejects_a_caster_out_of_view(native):
     assert random_scene.casters_in_view(spec, native.sun_position)[0] is False
 
 
-@pytest.fixture(scope="module", params=sorted(TINY_RANDOM))
-def random_generated(request, tmp_path_factory):
-    key = TINY_RANDOM[request.param]
-    out = str(tmp_path_factory.mktemp(f"random{key}"))
+def generate_tiny(key, out, mask_frames):
+    """(key, folder, truth) of the random scene `key` rendered tiny into
+    `out` by examples/generate_scene.py, in a Blender of its own."""
     cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
            "--python", os.path.join(os.path.dirname(random_scene.__file__), "generate_scene.py"),
-           "--", "--random", key, "--out", out, "--tiny", "--mask-frames", "2"]
+           "--", "--random", key, "--out", out, "--tiny", "--mask-frames", str(mask_frames)]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     return key, out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+
+
+@pytest.fixture(scope="module", params=sorted(TINY_RANDOM))
+def random_generated(request, tmp_path_factory):
+    key = TINY_RANDOM[request.param]
+    return generate_tiny(key, str(tmp_path_factory.mktemp(f"random{key}")), mask_frames=2)
 
 
 def test_random_scene_renders_its_spec(random_generated, native):
@@ -250,14 +255,8 @@ def test_rough_member_carries_the_hand_made_model_beside_the_true_one(rough_gene
 
 @pytest.fixture(scope="module", params=["trees1", "overcast1"])
 def kind_generated(request, tmp_path_factory):
-    key = request.param
-    out = str(tmp_path_factory.mktemp(key))
-    cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
-           "--python", os.path.join(os.path.dirname(random_scene.__file__), "generate_scene.py"),
-           "--", "--random", key, "--out", out, "--tiny", "--mask-frames", "1"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    return key, out, trackfile.read_track(os.path.join(out, "truth.sun.json"))
+    return generate_tiny(request.param, str(tmp_path_factory.mktemp(request.param)),
+                         mask_frames=1)
 
 
 def test_trees_and_overcast_sky_stay_out_of_the_users_scene(kind_generated):
