@@ -246,13 +246,22 @@ struct SkyEvidence::Impl {
     const int steps = o.band_steps;
     tbb::parallel_for(0, grid.size(), [&](int d) {
       const Eigen::Vector3f dir = grid.direction(d).cast<float>();
-      std::vector<uint8_t> occluded(s_count);
-      scene.OccludedToward(s_count, flat.data(), dir, 0.f, far,
-                           occluded.data());
-      std::vector<uint8_t> lit(s_count);
+      // Only samples facing the direction can be lit: the others cast no
+      // ray (a wall faces away from half the sky).
+      std::vector<int> facing;
+      std::vector<float> from;
+      facing.reserve(s_count);
+      from.reserve(3 * static_cast<size_t>(s_count));
       for (int i = 0; i < s_count; ++i) {
-        lit[i] = !occluded[i] && normal[i].dot(dir) > 0.02f;
+        if (normal[i].dot(dir) <= 0.02f) continue;
+        facing.push_back(i);
+        from.insert(from.end(), flat.begin() + 3 * i, flat.begin() + 3 * i + 3);
       }
+      std::vector<uint8_t> occluded(facing.size());
+      scene.OccludedToward(static_cast<int64_t>(facing.size()), from.data(),
+                           dir, 0.f, far, occluded.data());
+      std::vector<uint8_t> lit(s_count, 0);
+      for (size_t k = 0; k < facing.size(); ++k) lit[facing[k]] = !occluded[k];
       // Boundary samples, then grown by `steps` grid steps within the group.
       std::vector<int> dist(s_count, -1), queue;
       for (int i = 0; i < s_count; ++i) {
