@@ -192,6 +192,7 @@ class Decoder {
   bool ToGrayFromLuma(cv::Mat* out, cv::Size size) {
     const AVFrame* f = frame_;
     bool full_range = f->color_range == AVCOL_RANGE_JPEG;
+    if (ToGrayFromDeepLuma(out, size, full_range)) return true;
     switch (static_cast<AVPixelFormat>(f->format)) {
       case AV_PIX_FMT_YUVJ420P:
       case AV_PIX_FMT_YUVJ422P:
@@ -227,6 +228,46 @@ class Decoder {
               cv::saturate_cast<uint8_t>(std::lround((v - 16) * 255.0 / 219.0));
       }
       cv::LUT(reduced, video_to_full_, *out);
+    }
+    return true;
+  }
+
+  // The same from a 10- or 12-bit planar YUV picture (ProRes, DNxHR,
+  // 10-bit H.265), whose luma swscale would convert whole at full size (a
+  // 4K ProRes frame: more than its decoding's share): reduced in 16 bits,
+  // then brought to 8 bits and to full range in one step.
+  bool ToGrayFromDeepLuma(cv::Mat* out, cv::Size size, bool full_range) {
+    const AVFrame* f = frame_;
+    int bits = 0;
+    switch (static_cast<AVPixelFormat>(f->format)) {
+      case AV_PIX_FMT_YUV420P10LE:
+      case AV_PIX_FMT_YUV422P10LE:
+      case AV_PIX_FMT_YUV444P10LE:
+      case AV_PIX_FMT_YUVA422P10LE:
+      case AV_PIX_FMT_YUVA444P10LE:
+        bits = 10;
+        break;
+      case AV_PIX_FMT_YUV420P12LE:
+      case AV_PIX_FMT_YUV422P12LE:
+      case AV_PIX_FMT_YUV444P12LE:
+      case AV_PIX_FMT_YUVA422P12LE:
+      case AV_PIX_FMT_YUVA444P12LE:
+        bits = 12;
+        break;
+      default:
+        return false;
+    }
+    if (f->data[0] == nullptr || f->linesize[0] < 2 * f->width) return false;
+    const cv::Mat luma(f->height, f->width, CV_16UC1, f->data[0],
+                       static_cast<size_t>(f->linesize[0]));
+    const cv::Mat reduced = size.empty() ? luma : AreaReduced(luma, size);
+    const double unit = 1 << (bits - 8);  // one 8-bit level
+    if (full_range) {
+      reduced.convertTo(*out, CV_8U, 255.0 / ((1 << bits) - 1));
+    } else {
+      // Video range: black at 16, white at 235, in 8-bit levels.
+      reduced.convertTo(*out, CV_8U, 255.0 / (219.0 * unit),
+                        -16.0 * 255.0 / 219.0);
     }
     return true;
   }

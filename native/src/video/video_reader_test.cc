@@ -263,6 +263,44 @@ bool Ffmpeg(const std::string& args) {
              ("ffmpeg -v error -y " + args + " >/dev/null 2>&1").c_str()) == 0;
 }
 
+TEST(VideoReader, ReadsGrayFromA10BitLumaPlaneAsFromAn8BitOne) {
+  // ProRes (10-bit 4:2:2) and 10-bit H.264 have their own luma path; the
+  // same frames in 8 bits go through the 8-bit one.
+  const fs::path d = TempDir("deep");
+  const std::string src = (d / "ramp.avi").string();
+  {
+    cv::VideoWriter w(src, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                      cv::Size(128, 96));
+    ASSERT_TRUE(w.isOpened());
+    for (int i = 0; i < 3; ++i) w.write(Ramp(128, 96));
+  }
+  const std::string eight = (d / "eight.mkv").string();
+  const std::string deep = (d / "deep.mov").string();
+  if (!Ffmpeg("-i " + src + " -c:v ffv1 -pix_fmt yuv422p " + eight) ||
+      !Ffmpeg("-i " + src + " -c:v prores_ks -profile:v 3 -pix_fmt yuv422p10le " +
+              deep)) {
+    GTEST_SKIP() << "ffmpeg with ffv1 and prores_ks is not available";
+  }
+  for (cv::Size size : {cv::Size(), cv::Size(32, 24), cv::Size(50, 37)}) {
+    VideoReader a(eight), b(deep);
+    cv::Mat ga, gb, diff;
+    ASSERT_TRUE(a.ReadGray(&ga, size));
+    ASSERT_TRUE(b.ReadGray(&gb, size));
+    ASSERT_EQ(gb.type(), CV_8UC1);
+    ASSERT_EQ(gb.size(), ga.size());
+    cv::absdiff(ga, gb, diff);
+    double worst = 0;
+    cv::minMaxLoc(diff, nullptr, &worst);
+    // ProRes is lossy; ffv1 is not: a few levels at the ramp's edges.
+    EXPECT_LE(worst, 4.0) << size;
+    EXPECT_LE(cv::mean(diff)[0], 1.0) << size;
+    double black = 0, white = 0;
+    cv::minMaxLoc(gb, &black, &white);
+    EXPECT_LE(black, 6.0);
+    EXPECT_GE(white, 249.0);
+  }
+}
+
 TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
   const fs::path d = TempDir("near");
   const std::string src = NumberedMovie(d, 120);
