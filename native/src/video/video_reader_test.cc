@@ -277,8 +277,8 @@ TEST(VideoReader, ReadsGrayFromA10BitLumaPlaneAsFromAn8BitOne) {
   const std::string eight = (d / "eight.mkv").string();
   const std::string deep = (d / "deep.mov").string();
   if (!Ffmpeg("-i " + src + " -c:v ffv1 -pix_fmt yuv422p " + eight) ||
-      !Ffmpeg("-i " + src + " -c:v prores_ks -profile:v 3 -pix_fmt yuv422p10le " +
-              deep)) {
+      !Ffmpeg("-i " + src +
+              " -c:v prores_ks -profile:v 3 -pix_fmt yuv422p10le " + deep)) {
     GTEST_SKIP() << "ffmpeg with ffv1 and prores_ks is not available";
   }
   for (cv::Size size : {cv::Size(), cv::Size(32, 24), cv::Size(50, 37)}) {
