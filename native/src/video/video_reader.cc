@@ -164,7 +164,8 @@ class Decoder {
   // OpenCV's FFmpeg backend (bicubic, swscale's default colour matrix) so
   // tracks match those read through it; scaled, an area average.
   void ToImage(cv::Mat* out, bool gray, cv::Size size = cv::Size()) {
-    if (gray && ToGrayFromLuma(out, size)) return;
+    if (gray && (ToGrayFromLuma(out, size) || ToGrayFromDeepRgb(out, size)))
+      return;
     const AVFrame* f = frame_;
     const cv::Size to =
         gray || size.empty() ? cv::Size(f->width, f->height) : size;
@@ -272,6 +273,40 @@ class Decoder {
     return true;
   }
 
+  // Gray from a 16-bit packed RGB picture (TIFF stills from a raw
+  // converter): reduced in colour first (an area average commutes with the
+  // luma's weights), then weighed as cv::COLOR_RGB2GRAY does and brought to
+  // 8 bits, instead of swscale's conversion of the whole picture.
+  bool ToGrayFromDeepRgb(cv::Mat* out, cv::Size size) {
+    const AVFrame* f = frame_;
+    int type = 0, code = 0;
+    switch (static_cast<AVPixelFormat>(f->format)) {
+      case AV_PIX_FMT_RGB48LE:
+        type = CV_16UC3, code = cv::COLOR_RGB2GRAY;
+        break;
+      case AV_PIX_FMT_BGR48LE:
+        type = CV_16UC3, code = cv::COLOR_BGR2GRAY;
+        break;
+      case AV_PIX_FMT_RGBA64LE:
+        type = CV_16UC4, code = cv::COLOR_RGBA2GRAY;
+        break;
+      case AV_PIX_FMT_BGRA64LE:
+        type = CV_16UC4, code = cv::COLOR_BGRA2GRAY;
+        break;
+      default:
+        return false;
+    }
+    const int channels = CV_MAT_CN(type);
+    if (f->data[0] == nullptr || f->linesize[0] < 2 * channels * f->width)
+      return false;
+    const cv::Mat rgb(f->height, f->width, type, f->data[0],
+                      static_cast<size_t>(f->linesize[0]));
+    cv::Mat gray16;
+    cv::cvtColor(size.empty() ? rgb : AreaReduced(rgb, size), gray16, code);
+    gray16.convertTo(*out, CV_8U, 255.0 / 65535.0);
+    return true;
+  }
+
   cv::Mat video_to_full_;  // video-range luma -> 0-255
 
   AVFormatContext* format_ = nullptr;
@@ -286,13 +321,15 @@ class Decoder {
 // The first frame of one image file as BGR and/or gray, at the image's own
 // size; the message says why not.
 std::string DecodeImage(const std::string& path, cv::Mat* bgr,
-                        cv::Mat* gray = nullptr) {
+                        cv::Mat* gray = nullptr, cv::Size gray_size = {},
+                        cv::Size* decoded = nullptr) {
   Decoder d;
   std::string error = d.Open(path, /*single_image=*/true);
   if (error.empty()) {
     const int err = d.Next();
     if (err == 0) {
-      if (gray) d.ToImage(gray, true);
+      if (decoded) *decoded = cv::Size(d.frame()->width, d.frame()->height);
+      if (gray) d.ToImage(gray, true, gray_size);
       if (bgr) d.ToImage(bgr, false);
       return (gray && gray->empty()) || (bgr && bgr->empty())
                  ? "unsupported pixel format"
@@ -492,16 +529,19 @@ bool VideoReader::ReadSequence(const Wanted& want) {
     return true;
   }
   if (ReadScaledJpeg(file, want)) return true;
-  const std::string error = DecodeImage(file, want.bgr, want.gray);
+  // Gray at its size from the decoder (reduced before any conversion);
+  // colour whole, then reduced as always.
+  cv::Size decoded;
+  const std::string error =
+      DecodeImage(file, want.bgr, want.gray, want.gray_size, &decoded);
   if (!error.empty()) {
     last_.status = FrameStatus::kUndecodable;
     last_.message = "cannot decode " + file + " (" + error + ")";
     return true;
   }
-  const cv::Mat& any = want.gray ? *want.gray : *want.bgr;
-  last_.width = any.cols;
-  last_.height = any.rows;
-  if (any.cols != width_ || any.rows != height_) {
+  last_.width = decoded.width;
+  last_.height = decoded.height;
+  if (decoded.width != width_ || decoded.height != height_) {
     // A frame of another size is as unusable as a corrupt one.
     want.Release();
     last_.status = FrameStatus::kSizeChanged;
@@ -510,7 +550,6 @@ bool VideoReader::ReadSequence(const Wanted& want) {
                     std::to_string(width_) + "x" + std::to_string(height_);
     return true;
   }
-  if (want.gray) *want.gray = AreaReduced(*want.gray, want.gray_size);
   if (want.bgr) *want.bgr = AreaReduced(*want.bgr, want.bgr_size);
   return true;
 }

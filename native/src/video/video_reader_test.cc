@@ -139,6 +139,45 @@ TEST(VideoReader, ReadsGrayReducedByAreaAveraging) {
   EXPECT_LE(worst, 6.0);
 }
 
+TEST(VideoReader, Reads16BitTiffStillsAsTheir8BitTwins) {
+  // A raw converter's 16-bit TIFF export: gray from its own path, reduced
+  // before it is weighed; the same pictures in 8 bits go through swscale.
+  const fs::path d = TempDir("tiff16");
+  cv::Mat colour(96, 128, CV_8UC3);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(256));
+  cv::GaussianBlur(colour, colour, cv::Size(9, 9), 3);
+  for (int i = 1; i <= 2; ++i) {
+    cv::Mat deep;
+    colour.convertTo(deep, CV_16UC3, 257.0);
+    ASSERT_TRUE(cv::imwrite(
+        (d / ("deep_000" + std::to_string(i) + ".tif")).string(), deep));
+    ASSERT_TRUE(cv::imwrite(
+        (d / ("flat_000" + std::to_string(i) + ".png")).string(), colour));
+  }
+  for (cv::Size size : {cv::Size(), cv::Size(32, 24), cv::Size(50, 37)}) {
+    VideoReader deep((d / "deep_0001.tif").string()),
+        flat((d / "flat_0001.png").string());
+    for (int i = 0; i < 2; ++i) {
+      cv::Mat a, b;
+      ASSERT_TRUE(deep.ReadGray(&a, size));
+      ASSERT_TRUE(flat.ReadGray(&b, size));
+      ASSERT_EQ(deep.last_frame().status, FrameStatus::kOk);
+      ASSERT_EQ(a.type(), CV_8UC1);
+      ASSERT_EQ(a.size(), size.empty() ? cv::Size(128, 96) : size);
+      EXPECT_LE(cv::norm(a, b, cv::NORM_INF), 2.0) << size;
+    }
+  }
+  // A still of another size is reported as before.
+  cv::Mat other(48, 64, CV_16UC3, cv::Scalar::all(30000));
+  ASSERT_TRUE(cv::imwrite((d / "deep_0002.tif").string(), other));
+  VideoReader deep((d / "deep_0001.tif").string());
+  cv::Mat a;
+  ASSERT_TRUE(deep.ReadGray(&a, cv::Size(32, 24)));
+  ASSERT_TRUE(deep.ReadGray(&a, cv::Size(32, 24)));
+  EXPECT_EQ(deep.last_frame().status, FrameStatus::kSizeChanged);
+  EXPECT_TRUE(a.empty());
+}
+
 TEST(AreaReduced, HalvingsAreOneAreaAverage) {
   cv::Mat img(48, 64, CV_32F);
   cv::randu(img, 0.0, 1.0);
