@@ -87,6 +87,10 @@ def build_parser():
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
+    p.add_argument("--uncalibrated-confidence", action="store_true",
+                   help="write each frame's support as the estimator computes it instead of "
+                        "the probability of being within 2 deg; for refitting that "
+                        "calibration (bench/calibrate.py)")
     return p
 
 
@@ -360,6 +364,7 @@ def _run(argv, interrupt):
         clip, numbers, options = run.clip, run.frames, run.options
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)
+        options.calibrated_confidence = not args.uncalibrated_confidence
         interrupt.check()
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "

@@ -102,10 +102,14 @@ def draw_sun_summary(layout, context):
         n = angles.wrap_signed_deg(track.north_offset_deg)
         col.label(text=f"North offset {n:.1f}° ({north})" if north else
                   "North unknown (offset 0°)", icon="BLANK1")
-        col.label(text=f"Confidence {est.confidence:.2f}" + (
-            " (predicted: no direct sunlight)" if est.predicted and
-            est.sunlight == trackfile.Sunlight.NO else " (predicted)" if est.predicted else
-            "" if est.raw_zenith_deg is not None else " (smoothed)"), icon="BLANK1")
+        # A calibrated track's confidence is a chance the user can act on.
+        chance = trackfile.ConfidenceKind.of(track) == trackfile.ConfidenceKind.PROBABILITY \
+            and not est.predicted and est.raw_zenith_deg is not None
+        note = (" (predicted: no direct sunlight)" if est.predicted and
+                est.sunlight == trackfile.Sunlight.NO else " (predicted)" if est.predicted else
+                "" if est.raw_zenith_deg is not None else " (smoothed)")
+        col.label(text=f"Confidence {est.confidence:.0%} (within 2°)" if chance else
+                  f"Confidence {est.confidence:.2f}{note}", icon="BLANK1")
     if est.reason:
         wrapped(col, context, est.reason, icon="INFO", max_lines=3)
 

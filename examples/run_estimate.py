@@ -9,6 +9,7 @@ Contract (the accuracy benchmarks call it exactly so; extend, never break):
       [--times CSV] [--latitude DEG] [--longitude DEG] [--date YYYY-MM-DD] \
       [--start-time HH:MM[:SS]] [--utc-offset HOURS] [--frame-seconds S] \
       [--fit-latitude | --fixed-latitude] [--initial-sun ZENITH AZIMUTH]
+      [--uncalibrated-confidence]
 
 Flags:
   --out TRACK.json      the track file to write (*.sun.json; docs/track-format.md)
@@ -44,6 +45,12 @@ Flags:
   --initial-sun Z A     start from this Sun on the first frame (degrees, azimuth
                         as in the track file) instead of estimating it: measures
                         the tracker alone
+  --uncalibrated-confidence
+                        write each frame's support as the estimator computes
+                        it, not the probability (0-1) that its Sun is within
+                        2 deg, which is the default; for refitting that
+                        calibration (bench/calibrate.py). The track's
+                        method.confidence says which one a file holds
 
 Clip, camera and model come from the .blend (active clip, scene camera) unless
 given. On failure it prints one line "sunlapse: error: <reason>" on stderr and

@@ -186,3 +186,35 @@ def plot(report: SceneReport, path: str) -> Optional[str]:
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return path
+
+
+def isotonic_fit(frames: Sequence[Tuple[float, float]], within_deg: float = 2.0,
+                 min_block: int = 1) -> List[Tuple[float, float]]:
+    """The calibration that makes confidence a probability: frames (error
+    deg, confidence), the share of frames within `within_deg` as a
+    non-decreasing function of confidence (pool adjacent violators), as knots
+    (mean confidence of a block, its share) to interpolate between. Blocks
+    of fewer than `min_block` frames are pooled with a neighbour, so one
+    frame cannot set a knot. Empty without frames."""
+    # Frames of one confidence are one block from the start: sorted, the
+    # misses of a tie would come first and split it into a 0 and a 1.
+    ties: dict = {}
+    for e, c in frames:
+        block = ties.setdefault(c, [0.0, 0.0, 0.0])
+        block[0] += c
+        block[1] += 1.0 if e <= within_deg else 0.0
+        block[2] += 1.0
+    # Each block: [sum of confidences, sum of hits, frames].
+    blocks: List[List[float]] = []
+    for c in sorted(ties):
+        blocks.append(list(ties[c]))
+        while len(blocks) > 1 and (blocks[-2][1] / blocks[-2][2] >= blocks[-1][1] / blocks[-1][2]
+                                   or blocks[-2][2] < min_block):
+            top = blocks.pop()
+            for i in range(3):
+                blocks[-1][i] += top[i]
+    if len(blocks) > 1 and blocks[-1][2] < min_block:
+        top = blocks.pop()
+        for i in range(3):
+            blocks[-1][i] += top[i]
+    return [(s_c / n, s_hit / n) for s_c, s_hit, n in blocks]

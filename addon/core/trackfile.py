@@ -36,6 +36,23 @@ class Sunlight(str, Enum):
     UNKNOWN = "unknown"
 
 
+class ConfidenceKind(str, Enum):
+    """What a track's per-frame confidence is (the track's
+    method["confidence"]): PROBABILITY, the chance that the frame's Sun is
+    within 2 deg of the true one (ours, calibrated on the suite); SUPPORT,
+    the estimator's own score (the thesis baseline's, an uncalibrated run's,
+    and files written before it was calibrated)."""
+    PROBABILITY = "probability within 2 deg"
+    SUPPORT = "support"
+
+    @classmethod
+    def of(cls, track: "Track") -> "ConfidenceKind":
+        try:
+            return cls(track.method.get("confidence", cls.SUPPORT.value))
+        except ValueError:
+            return cls.SUPPORT
+
+
 @dataclass
 class FrameEstimate:
     frame: int

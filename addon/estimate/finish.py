@@ -9,7 +9,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import motion
+from . import calibration, motion
 from .errors import check_progress
 from .options import SMOOTHING_SPACE, TWO_PASS_DEGREE, EstimateOptions
 from .raw import RawSun
@@ -114,6 +114,14 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     if smoothed is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle)
+    # The whole clip's support is reported as a probability (calibration.py);
+    # the thesis's tracker keeps its own score, which was never fitted.
+    calibrated = (options.calibrated_confidence and options.method == "default"
+                  and track.method.get("tracking") == "whole_clip")
+    track.method["confidence"] = (trackfile.ConfidenceKind.PROBABILITY if calibrated else
+                                  trackfile.ConfidenceKind.SUPPORT).value
+    if calibrated and track.initial and track.initial.get("confidence") is not None:
+        track.initial["confidence"] = calibration.probability(track.initial["confidence"])
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = _predicted(r) and r.clock_sun is not None
         if by_clock:
@@ -128,7 +136,9 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
         est = trackfile.FrameEstimate(frame=r.frame, zenith_deg=_settled(z_s),
                                       azimuth_deg=_settled(a_s),
                                       raw_zenith_deg=r.zenith_deg, raw_azimuth_deg=r.azimuth_deg,
-                                      confidence=0.0 if predicted else r.confidence,
+                                      confidence=0.0 if predicted else
+                                      calibration.probability(r.confidence) if calibrated else
+                                      r.confidence,
                                       reason=reason,
                                       time_utc=None if times is None else times[k].isoformat(),
                                       sunlight=r.sunlight, predicted=predicted)

@@ -81,6 +81,10 @@ class EstimateOptions:
     # frames' GPS gave it); True fits it too, about the given one, loosely:
     # on a roughly modelled urban scene the fit moved a typed 32.2 to 41.0.
     fit_latitude: bool = False
+    # The track's confidence as a probability of being within 2 deg
+    # (calibration.py); False writes the estimator's support as it is, which
+    # is what bench/calibrate.py refits the map from.
+    calibrated_confidence: bool = True
 
     def check(self) -> None:
         """Raises EstimateError naming the first option that cannot be."""

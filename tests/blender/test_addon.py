@@ -100,6 +100,7 @@ def test_scripted_run_writes_a_track_for_a_valid_scene(empty_scene, tmp_path):
     # Flat grey frames cannot fix the Sun: whatever comes out has almost no
     # confidence; later frames wait for shadow tracking and say so.
     assert track["frames"][0]["confidence"] < 0.1
+    assert track["method"]["confidence"] == "probability within 2 deg"
     assert all(f["reason"] for f in track["frames"][1:])
     assert track["clip"].endswith("frame_0001.png")
     # The user is told why, in words.

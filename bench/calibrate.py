@@ -1,0 +1,153 @@
+"""Fits the map from the whole-clip estimate's support to a probability
+(addon/estimate/calibration.py) on the randomised suite, and says how well
+it holds on scenes it was not fitted on.
+
+  python3 bench/suite.py --uncalibrated-confidence [members ...] --out RAW.json
+  python3 bench/calibrate.py --suite RAW.json [--suite RAW2.json ...]
+                             [--min-block N] [--folds K] [--write]
+
+Every scored frame of every member (not the "/true" twins) is a pair (error
+against the truth, support); the map is the share of frames within 2 deg as
+a non-decreasing function of support (pool adjacent violators, blocks of at
+least --min-block frames, default 40), as knots to interpolate between,
+fitted on the frames with some support (support 0 stays 0). Frames whose
+support is below calibration.DOUBTED_SUPPORT are then held below 0.5.
+
+Printed: the reliability table and expected calibration error (ECE, 10
+bins) of the support as it is; the same of the map applied to scenes it was
+not fitted on (K folds of whole scenes, every K-th scene held out in turn,
+default 2): the figure to trust; the same fitted and judged on all (which
+flatters it); the frames more than 5 deg off at confidence >= 0.5 before and
+after; and the knots. --write puts the knots fitted on all the scenes into
+addon/estimate/calibration.py. Exit 0 whatever the figures (2: bad flags or
+files).
+"""
+import argparse
+import json
+import os
+import re
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+
+from core import evaluation  # noqa: E402
+from estimate import calibration  # noqa: E402
+
+WITHIN_DEG = 2.0
+WRONG_DEG = 5.0
+TABLE = os.path.join(ROOT, "addon", "estimate", "calibration.py")
+TABLE_NAME = "SUPPORT_TO_PROBABILITY"
+
+
+def fail(message):
+    print(f"calibrate: error: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def scenes_from(paths):
+    """{scene: [(error deg, support)]} over the suite runs' JSON files."""
+    scenes = {}
+    for path in paths:
+        try:
+            with open(path) as fh:
+                figures = json.load(fh)
+        except (OSError, ValueError) as e:
+            fail(f"cannot read the suite's figures {path}: {e}")
+        for smoothing, block in figures.get("smoothings", {}).items():
+            for row in block.get("scenes", []):
+                if row["scene"].endswith("/true"):
+                    continue
+                frames = [(p["error_deg"], p["confidence"]) for p in row.get("per_frame", [])
+                          if p["error_deg"] is not None and p["confidence"] is not None]
+                scenes.setdefault(f"{smoothing}:{row['scene']}", []).extend(frames)
+    if not scenes:
+        fail("no scored frames in " + ", ".join(paths))
+    return scenes
+
+
+def fit(frames, min_block):
+    """Knots from frames with support: a frame without any keeps 0 (the
+    map's rule), and one fitted at 0 would lift every frame of little."""
+    return evaluation.isotonic_fit([f for f in frames if f[1] > 0], WITHIN_DEG, min_block)
+
+
+def mapped(frames, knots):
+    return [(e, calibration.probability(c, knots)) for e, c in frames]
+
+
+def wrong_at_half(frames):
+    return sum(e > WRONG_DEG and c >= 0.5 for e, c in frames)
+
+
+def print_table(title, frames):
+    bins, ece = evaluation.reliability(frames, WITHIN_DEG)
+    print(f"\n{title}: {len(frames)} frames, ECE {ece:.3f} (target <= 0.05), "
+          f"{wrong_at_half(frames)} frame(s) more than {WRONG_DEG:g} deg off at >= 0.5")
+    print(f"  {'confidence':<12}{'frames':>7}{'mean':>7}{'within':>8}")
+    for b in bins:
+        print(f"  {b.lo:.1f}-{b.hi:.1f}    {b.frames:>7}{b.mean_confidence:>7.2f}"
+              f"{b.share_within:>8.2f}")
+    return ece
+
+
+def held_out(scenes, folds, min_block):
+    """Every scene's frames mapped by knots fitted without its fold."""
+    names = sorted(scenes)
+    out = []
+    for k in range(folds):
+        fit_on = [f for i, n in enumerate(names) if i % folds != k for f in scenes[n]]
+        knots = fit(fit_on, min_block)
+        out += mapped([f for i, n in enumerate(names) if i % folds == k for f in scenes[n]],
+                      knots)
+    return out
+
+
+def write_knots(knots):
+    text = open(TABLE).read()
+    body = "".join(f"    ({c:.4f}, {p:.4f}),\n" for c, p in knots)
+    new, n = re.subn(rf"{TABLE_NAME}: Tuple\[Tuple\[float, float\], \.\.\.\] = \((?:.|\n)*?\n?\)\n",
+                     f"{TABLE_NAME}: Tuple[Tuple[float, float], ...] = (\n{body})\n", text,
+                     count=1)
+    if n != 1:
+        fail(f"no {TABLE_NAME} table in {TABLE}")
+    with open(TABLE, "w") as fh:
+        fh.write(new)
+    print(f"\nwrote {len(knots)} knots into {os.path.relpath(TABLE, ROOT)}")
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--suite", action="append", required=True, metavar="FIGURES.json",
+                   help="bench/suite.py --uncalibrated-confidence --out's file (repeatable)")
+    p.add_argument("--min-block", type=int, default=40,
+                   help="frames a knot stands for at least (default 40)")
+    p.add_argument("--folds", type=int, default=2,
+                   help="folds of whole scenes for the held-out figure (default 2)")
+    p.add_argument("--write", action="store_true",
+                   help="write the knots fitted on every scene into calibration.py")
+    args = p.parse_args(argv)
+    if args.min_block < 1:
+        p.error(f"--min-block must be at least 1, got {args.min_block}")
+    if args.folds < 2:
+        p.error(f"--folds must be at least 2, got {args.folds}")
+    scenes = scenes_from(args.suite)
+    every = [f for n in sorted(scenes) for f in scenes[n]]
+    if len(scenes) < args.folds:
+        p.error(f"--folds {args.folds} needs as many scenes; the files hold {len(scenes)}")
+    print(f"{len(scenes)} scene runs, {len(every)} scored frames")
+    print_table("support as the estimator computes it", every)
+    print_table(f"calibrated, judged on scenes held out ({args.folds} folds)",
+                held_out(scenes, args.folds, args.min_block))
+    knots = fit(every, args.min_block)
+    print_table("calibrated, fitted and judged on every scene", mapped(every, knots))
+    print("\nknots (support, probability within 2 deg):")
+    for c, prob in knots:
+        print(f"  ({c:.4f}, {prob:.4f}),")
+    if args.write:
+        write_knots(knots)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,115 @@
+"""Confidence as a probability (issue 25 item 4): the fit that makes it one
+(core.evaluation.isotonic_fit, run by bench/calibrate.py), the map the
+estimate applies (estimate.calibration) and where it applies it."""
+import random
+
+import pytest
+
+from sunlapse.core import evaluation, trackfile
+from sunlapse.estimate import calibration, finish
+from sunlapse.estimate import options as estimate_options
+from sunlapse.estimate.raw import RawSun
+
+
+def drawn(n, chance, seed=3):
+    """n frames (error deg, support) whose chance of being within 2 deg at
+    support s is chance(s)."""
+    rng = random.Random(seed)
+    out = []
+    for _ in range(n):
+        s = rng.random()
+        out.append((rng.uniform(0, 2) if rng.random() < chance(s) else rng.uniform(2.1, 20), s))
+    return out
+
+
+def test_the_fit_makes_an_overconfident_support_a_probability_on_new_frames():
+    def chance(s):
+        return s * s  # support 0.5 is right a quarter of the time
+    fitted = evaluation.isotonic_fit(drawn(4000, chance), 2.0, min_block=40)
+    fresh = drawn(4000, chance, seed=4)
+    _, before = evaluation.reliability(fresh)
+    _, after = evaluation.reliability([(e, calibration.probability(s, fitted)) for e, s in fresh])
+    assert before > 0.15
+    assert after < 0.03, after
+
+
+def test_the_fit_is_monotone_and_each_knot_stands_for_enough_frames():
+    frames = drawn(500, lambda s: 0.2 + 0.6 * s)
+    knots = evaluation.isotonic_fit(frames, 2.0, min_block=50)
+    assert len(knots) <= 500 // 50
+    assert all(a[0] < b[0] and a[1] < b[1] for a, b in zip(knots, knots[1:]))
+    assert all(0.0 <= p <= 1.0 for _, p in knots)
+    # Without the block floor, noise alone sets more knots.
+    assert len(evaluation.isotonic_fit(frames, 2.0, min_block=1)) > len(knots)
+    assert evaluation.isotonic_fit([], 2.0) == []
+
+
+def test_the_map_interpolates_holds_its_ends_and_keeps_zero():
+    knots = ((0.6, 0.7), (0.9, 0.9))
+    assert calibration.probability(0.75, knots) == pytest.approx(0.8)
+    assert calibration.probability(0.55, knots) == pytest.approx(0.7 * 0.55 / 0.6)
+    assert calibration.probability(0.95, knots) == pytest.approx(0.9)
+    assert calibration.probability(0.0, knots) == 0.0
+
+
+def test_frames_the_estimate_doubted_stay_below_one_half():
+    knots = ((0.1, 0.9), (1.0, 0.95))
+    below = calibration.DOUBTED_SUPPORT - 0.01
+    assert calibration.probability(below, knots) == calibration.DOUBTED_MAX_PROBABILITY < 0.5
+    assert calibration.probability(calibration.DOUBTED_SUPPORT, knots) > 0.9
+
+
+def test_frames_of_one_confidence_are_pooled_not_split():
+    # 10 frames at 0.9, 3 of them off: one knot at 0.7, not a 0 and a 1.
+    frames = [(1.0, 0.9)] * 7 + [(9.0, 0.9)] * 3 + [(1.0, 0.2), (9.0, 0.2)]
+    assert evaluation.isotonic_fit(frames, 2.0) == [(pytest.approx(0.2), 0.5),
+                                                    (pytest.approx(0.9), pytest.approx(0.7))]
+
+
+def test_the_shipped_map_is_a_monotone_probability():
+    knots = calibration.SUPPORT_TO_PROBABILITY
+    assert len(knots) >= 3, "fit it with bench/calibrate.py --write"
+    assert all(0.0 <= p <= 1.0 for _, p in knots)
+    assert all(a[0] < b[0] and a[1] <= b[1] for a, b in zip(knots, knots[1:]))
+    values = [calibration.probability(k / 100) for k in range(101)]
+    assert all(a <= b for a, b in zip(values, values[1:]))
+
+
+def finished(method, calibrated, tracking="whole_clip"):
+    raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=c)
+            for f, c in zip(range(1, 6), (0.05, 0.3, 0.5, 0.7, 0.95))]
+    track = trackfile.Track(method={"initial": method, "tracking": tracking,
+                                    "smoothing": "two_pass"},
+                            initial={"frame": 4, "zenith_deg": 44.0, "azimuth_deg": 184.0,
+                                     "confidence": 0.7})
+    opts = estimate_options.EstimateOptions(method=method, calibrated_confidence=calibrated)
+    finish.finish(None, track, raws, opts, None, None, [[r.frame for r in raws]])
+    return track, [r.confidence for r in raws]
+
+
+def test_the_whole_clip_track_reports_the_probability_and_says_so():
+    track, support = finished("default", True)
+    assert trackfile.ConfidenceKind.of(track) == trackfile.ConfidenceKind.PROBABILITY
+    assert [f.confidence for f in track.frames] == \
+        [pytest.approx(calibration.probability(s)) for s in support]
+    assert [f.confidence for f in track.frames] != pytest.approx(support)
+    assert track.initial["confidence"] == pytest.approx(calibration.probability(0.7))
+
+
+@pytest.mark.parametrize("method,calibrated,tracking", [("default", False, "whole_clip"),
+                                                        ("thesis", True, "thesis"),
+                                                        ("default", True, "thesis")])
+def test_asked_for_or_not_fitted_the_support_is_reported_as_it_is(method, calibrated, tracking):
+    track, support = finished(method, calibrated, tracking)
+    assert trackfile.ConfidenceKind.of(track) == trackfile.ConfidenceKind.SUPPORT
+    assert [f.confidence for f in track.frames] == pytest.approx(support)
+    assert track.initial["confidence"] == 0.7
+
+
+def test_a_track_says_what_its_confidence_is_and_old_files_are_support():
+    track = trackfile.Track(method={"confidence": "probability within 2 deg"})
+    back = trackfile.from_json(trackfile.to_json(track))
+    assert trackfile.ConfidenceKind.of(back) == trackfile.ConfidenceKind.PROBABILITY
+    for method in ({}, {"confidence": "something newer"}):
+        assert trackfile.ConfidenceKind.of(trackfile.Track(method=method)) == \
+            trackfile.ConfidenceKind.SUPPORT
