@@ -10,8 +10,11 @@ Every scored frame of every member (not the "/true" twins) is a pair (error
 against the truth, support); the map is the share of frames within 2 deg as
 a non-decreasing function of support (pool adjacent violators, blocks of at
 least --min-block frames, default 40), as knots to interpolate between,
-fitted on the frames with some support (support 0 stays 0). Frames whose
-support is below calibration.DOUBTED_SUPPORT are then held below 0.5.
+fitted on the frames with some support (support 0 stays 0) of the clips it
+applies to. Frames whose support is below calibration.DOUBTED_SUPPORT are
+then held below 0.5, and so is every frame of a clip whose Sun was measured
+on too few of the frames that could show it (calibration.clip_doubted; the
+suite's measured_share, from the track's sun_measured_share).
 
 Printed: the reliability table and expected calibration error (ECE, 10
 bins) of the support as it is; the same of the map applied to scenes it was
@@ -46,8 +49,9 @@ def fail(message):
 
 
 def scenes_from(paths):
-    """{scene: [(error deg, support)]} over the suite runs' JSON files."""
-    scenes = {}
+    """{scene: [(error deg, support)]} over the suite runs' JSON files, and
+    {scene: whether calibration.clip_doubted holds it below 0.5}."""
+    scenes, doubted = {}, {}
     for path in paths:
         try:
             with open(path) as fh:
@@ -60,10 +64,13 @@ def scenes_from(paths):
                     continue
                 frames = [(p["error_deg"], p["confidence"]) for p in row.get("per_frame", [])
                           if p["error_deg"] is not None and p["confidence"] is not None]
-                scenes.setdefault(f"{smoothing}:{row['scene']}", []).extend(frames)
+                key = f"{smoothing}:{row['scene']}"
+                scenes.setdefault(key, []).extend(frames)
+                share = row.get("measured_share")
+                doubted[key] = share is not None and calibration.clip_doubted(share)
     if not scenes:
         fail("no scored frames in " + ", ".join(paths))
-    return scenes
+    return scenes, doubted
 
 
 def fit(frames, min_block):
@@ -72,8 +79,8 @@ def fit(frames, min_block):
     return evaluation.isotonic_fit([f for f in frames if f[1] > 0], WITHIN_DEG, min_block)
 
 
-def mapped(frames, knots):
-    return [(e, calibration.probability(c, knots)) for e, c in frames]
+def mapped(frames, knots, doubted=False):
+    return [(e, calibration.probability(c, knots, doubted)) for e, c in frames]
 
 
 def wrong_at_half(frames):
@@ -91,15 +98,17 @@ def print_table(title, frames):
     return ece
 
 
-def held_out(scenes, folds, min_block):
-    """Every scene's frames mapped by knots fitted without its fold."""
+def held_out(scenes, doubted, folds, min_block):
+    """Every scene's frames mapped by knots fitted without its fold (on the
+    clips the map applies to)."""
     names = sorted(scenes)
     out = []
     for k in range(folds):
-        fit_on = [f for i, n in enumerate(names) if i % folds != k for f in scenes[n]]
-        knots = fit(fit_on, min_block)
-        out += mapped([f for i, n in enumerate(names) if i % folds == k for f in scenes[n]],
-                      knots)
+        knots = fit([f for i, n in enumerate(names) if i % folds != k and not doubted[n]
+                     for f in scenes[n]], min_block)
+        for i, n in enumerate(names):
+            if i % folds == k:
+                out += mapped(scenes[n], knots, doubted[n])
     return out
 
 
@@ -131,16 +140,21 @@ def main(argv=None):
         p.error(f"--min-block must be at least 1, got {args.min_block}")
     if args.folds < 2:
         p.error(f"--folds must be at least 2, got {args.folds}")
-    scenes = scenes_from(args.suite)
+    scenes, doubted = scenes_from(args.suite)
     every = [f for n in sorted(scenes) for f in scenes[n]]
     if len(scenes) < args.folds:
         p.error(f"--folds {args.folds} needs as many scenes; the files hold {len(scenes)}")
-    print(f"{len(scenes)} scene runs, {len(every)} scored frames")
+    held = sorted(n for n in scenes if doubted[n])
+    print(f"{len(scenes)} scene runs, {len(every)} scored frames; clips held below 0.5 "
+          f"(Sun measured on under {calibration.MEASURED_SHARE_MIN:.0%} of the frames that "
+          f"could show it): {', '.join(held) or 'none'}")
     print_table("support as the estimator computes it", every)
     print_table(f"calibrated, judged on scenes held out ({args.folds} folds)",
-                held_out(scenes, args.folds, args.min_block))
-    knots = fit(every, args.min_block)
-    print_table("calibrated, fitted and judged on every scene", mapped(every, knots))
+                held_out(scenes, doubted, args.folds, args.min_block))
+    knots = fit([f for n in sorted(scenes) if not doubted[n] for f in scenes[n]],
+                args.min_block)
+    print_table("calibrated, fitted and judged on every scene",
+                [f for n in sorted(scenes) for f in mapped(scenes[n], knots, doubted[n])])
     print("\nknots (support, probability within 2 deg):")
     for c, prob in knots:
         print(f"  ({c:.4f}, {prob:.4f}),")

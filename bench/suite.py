@@ -289,7 +289,10 @@ def score(key, folder, track_path, wall_s, error):
                azimuth_max=rep.azimuth and rep.azimuth.max,
                direction_mean=rep.direction and rep.direction.mean,
                direction_max=rep.direction and rep.direction.max,
-               total_s=timing.get("total_s"), per_frame=per_frame)
+               total_s=timing.get("total_s"), per_frame=per_frame,
+               # The share of the frames that could show the Sun on which it
+               # was measured (bench/calibrate.py's clip rule).
+               measured_share=(track.extra or {}).get("sun_measured_share"))
     # Every frame must be estimated: a missing frame fails the scene.
     row["passed"] = bool(rep.frames_estimated == len(up) and rep.zenith and
                          rep.zenith.mean <= PASS_MEAN_DEG and rep.zenith.max <= PASS_MAX_DEG and

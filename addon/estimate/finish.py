@@ -120,8 +120,21 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                   and track.method.get("tracking") == "whole_clip")
     track.method["confidence"] = (trackfile.ConfidenceKind.PROBABILITY if calibrated else
                                   trackfile.ConfidenceKind.SUPPORT).value
-    if calibrated and track.initial and track.initial.get("confidence") is not None:
-        track.initial["confidence"] = calibration.probability(track.initial["confidence"])
+    could_show = [r for r in raws if r.sunlight != Sunlight.NO]
+    measured = sum(r.has_sun for r in could_show)
+    share = measured / len(could_show) if could_show else 1.0
+    track.extra["sun_measured_share"] = round(share, 4)
+    doubted = calibrated and calibration.clip_doubted(share)
+    if doubted:
+        track.report("confidence", trackfile.ProblemKind.FELL_BACK,
+                     f"the Sun was measured on {measured} of the {len(could_show)} frames that "
+                     f"could show it ({share:.0%}): the estimate does not explain this clip "
+                     f"well, so no frame's confidence reaches 0.5")
+
+    def reported(support: float) -> float:
+        return calibration.probability(support, doubted_clip=doubted) if calibrated else support
+    if track.initial and track.initial.get("confidence") is not None:
+        track.initial["confidence"] = reported(track.initial["confidence"])
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = _predicted(r) and r.clock_sun is not None
         if by_clock:
@@ -137,8 +150,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                                       azimuth_deg=_settled(a_s),
                                       raw_zenith_deg=r.zenith_deg, raw_azimuth_deg=r.azimuth_deg,
                                       confidence=0.0 if predicted else
-                                      calibration.probability(r.confidence) if calibrated else
-                                      r.confidence,
+                                      reported(r.confidence),
                                       reason=reason,
                                       time_utc=None if times is None else times[k].isoformat(),
                                       sunlight=r.sunlight, predicted=predicted)
