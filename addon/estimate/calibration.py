@@ -12,7 +12,7 @@ below from a suite run made with --uncalibrated-confidence."""
 from __future__ import annotations
 
 import bisect
-from typing import Sequence, Tuple
+from typing import Sequence, Set, Tuple
 
 # (support, probability within 2 deg) knots, support ascending; a frame
 # between two knots is interpolated linearly, beyond the ends held.
@@ -37,6 +37,20 @@ DOUBTED_MAX_PROBABILITY = 0.49
 # more) fall below it, and they held every frame more than 5 deg off at 0.5
 # or more; the AMOS webcams, 20-70 deg off, 0.18 and 0.36.
 MEASURED_SHARE_MIN = 0.85
+
+
+# A segment of fewer frames than this split off the rest of the clip (a cut
+# or a jump of the path) has too little of the Sun's path to confirm it: its
+# frames stay below 0.5. On 84 suite scenes the only such segment was
+# rough7's frames 1-3, 50 deg off at 0.90.
+SHORT_SEGMENT_FRAMES = 4
+
+
+def short_segment_frames(segments: Sequence[Sequence[int]]) -> Set[int]:
+    """The frames of the short segments of a clip cut into several."""
+    if len(segments) < 2:
+        return set()
+    return {f for segment in segments if len(segment) < SHORT_SEGMENT_FRAMES for f in segment}
 
 
 def clip_doubted(measured_share: float) -> bool:

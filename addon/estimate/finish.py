@@ -131,10 +131,16 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"could show it ({share:.0%}): the estimate does not explain this clip "
                      f"well, so no frame's confidence reaches 0.5")
 
-    def reported(support: float) -> float:
-        return calibration.probability(support, doubted_clip=doubted) if calibrated else support
+    short = calibration.short_segment_frames(segments) if calibrated else set()
+
+    def reported(support: float, frame: Optional[int] = None) -> float:
+        if not calibrated:
+            return support
+        value = calibration.probability(support, doubted_clip=doubted)
+        return min(value, calibration.DOUBTED_MAX_PROBABILITY) if frame in short else value
     if track.initial and track.initial.get("confidence") is not None:
-        track.initial["confidence"] = reported(track.initial["confidence"])
+        track.initial["confidence"] = reported(track.initial["confidence"],
+                                               track.initial.get("frame"))
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = _predicted(r) and r.clock_sun is not None
         if by_clock:
@@ -150,7 +156,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                                       azimuth_deg=_settled(a_s),
                                       raw_zenith_deg=r.zenith_deg, raw_azimuth_deg=r.azimuth_deg,
                                       confidence=0.0 if predicted else
-                                      reported(r.confidence),
+                                      reported(r.confidence, r.frame),
                                       reason=reason,
                                       time_utc=None if times is None else times[k].isoformat(),
                                       sunlight=r.sunlight, predicted=predicted)

@@ -136,3 +136,16 @@ def test_a_clip_whose_sun_was_seldom_measured_keeps_its_support_below_one_half()
                                                         pytest.approx(0.3)]
     problem = track.problem("confidence")
     assert problem is not None and "2 of the 5 frames" in problem.message
+
+
+def test_a_short_segment_split_off_the_clip_stays_below_one_half():
+    assert calibration.short_segment_frames([[1, 2, 3], [4, 5, 6, 7, 8]]) == {1, 2, 3}
+    assert calibration.short_segment_frames([[1, 2, 3]]) == set()  # the whole clip
+    raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97, sunlight=trackfile.Sunlight.YES)
+            for f in range(1, 9)]
+    track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                    "smoothing": "two_pass"})
+    finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
+                  [[1, 2, 3], [4, 5, 6, 7, 8]])
+    assert [f.confidence for f in track.frames[:3]] == [calibration.DOUBTED_MAX_PROBABILITY] * 3
+    assert all(f.confidence > 0.9 for f in track.frames[3:])
