@@ -75,14 +75,15 @@ def test_the_shipped_map_is_a_monotone_probability():
     assert all(a <= b for a, b in zip(values, values[1:]))
 
 
-def finished(method, calibrated, tracking="whole_clip"):
+def finished(method, calibrated, tracking="whole_clip", smoothing="two_pass"):
     raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=c)
             for f, c in zip(range(1, 6), (0.05, 0.3, 0.5, 0.7, 0.95))]
     track = trackfile.Track(method={"initial": method, "tracking": tracking,
                                     "smoothing": "two_pass"},
                             initial={"frame": 4, "zenith_deg": 44.0, "azimuth_deg": 184.0,
                                      "confidence": 0.7})
-    opts = estimate_options.EstimateOptions(method=method, calibrated_confidence=calibrated)
+    opts = estimate_options.EstimateOptions(method=method, calibrated_confidence=calibrated,
+                                            smoothing=smoothing)
     finish.finish(None, track, raws, opts, None, None, [[r.frame for r in raws]])
     return track, [r.confidence for r in raws]
 
@@ -96,11 +97,12 @@ def test_the_whole_clip_track_reports_the_probability_and_says_so():
     assert track.initial["confidence"] == pytest.approx(calibration.probability(0.7))
 
 
-@pytest.mark.parametrize("method,calibrated,tracking", [("default", False, "whole_clip"),
-                                                        ("thesis", True, "thesis"),
-                                                        ("default", True, "thesis")])
-def test_asked_for_or_not_fitted_the_support_is_reported_as_it_is(method, calibrated, tracking):
-    track, support = finished(method, calibrated, tracking)
+@pytest.mark.parametrize("method,calibrated,tracking,smoothing", [
+    ("default", False, "whole_clip", "two_pass"), ("thesis", True, "thesis", "two_pass"),
+    ("default", True, "thesis", "two_pass"), ("default", True, "whole_clip", "online")])
+def test_asked_for_or_not_fitted_the_support_is_reported_as_it_is(method, calibrated, tracking,
+                                                                  smoothing):
+    track, support = finished(method, calibrated, tracking, smoothing)
     assert trackfile.ConfidenceKind.of(track) == trackfile.ConfidenceKind.SUPPORT
     assert [f.confidence for f in track.frames] == pytest.approx(support)
     assert track.initial["confidence"] == 0.7
