@@ -34,11 +34,12 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
 from core import evaluation  # noqa: E402
 from estimate import calibration  # noqa: E402
-
-WITHIN_DEG = 2.0
-WRONG_DEG = 5.0
+from suite import (CONFIDENT_WITHIN_DEG as WITHIN_DEG,  # noqa: E402
+                   CONFIDENT_WRONG_DEG as WRONG_DEG)
 TABLE = os.path.join(ROOT, "addon", "estimate", "calibration.py")
 TABLE_NAME = "SUPPORT_TO_PROBABILITY"
 

@@ -206,15 +206,15 @@ def isotonic_fit(frames: Sequence[Tuple[float, float]], within_deg: float = 2.0,
         block[2] += 1.0
     # Each block: [sum of confidences, sum of hits, frames].
     blocks: List[List[float]] = []
+
+    def merge_last() -> None:
+        top = blocks.pop()
+        blocks[-1] = [a + b for a, b in zip(blocks[-1], top)]
     for c in sorted(ties):
         blocks.append(list(ties[c]))
         while len(blocks) > 1 and (blocks[-2][1] / blocks[-2][2] >= blocks[-1][1] / blocks[-1][2]
                                    or blocks[-2][2] < min_block):
-            top = blocks.pop()
-            for i in range(3):
-                blocks[-1][i] += top[i]
+            merge_last()
     if len(blocks) > 1 and blocks[-1][2] < min_block:
-        top = blocks.pop()
-        for i in range(3):
-            blocks[-1][i] += top[i]
+        merge_last()
     return [(s_c / n, s_hit / n) for s_c, s_hit, n in blocks]

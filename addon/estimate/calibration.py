@@ -4,10 +4,11 @@ mapped to the chance that the Sun is within 2 deg of the truth.
 
 The map was fitted on the randomised suite by bench/calibrate.py (pool
 adjacent violators over every frame of every scene, docs/accuracy.md §
-"Confidence as a probability"); it holds for the default method with
-two-pass smoothing, the mode the suite runs. Refit it when the support
-changes: `python3 bench/calibrate.py --suite FIGURES.json` prints the table
-below from a suite run made with --uncalibrated-confidence."""
+"Confidence as a probability"); measured to hold for the default method
+with two-pass and physical smoothing (finish.py applies it there only).
+Refit it when the support changes: `python3 bench/calibrate.py --suite
+FIGURES.json` prints the table below from a suite run made with
+--uncalibrated-confidence."""
 
 from __future__ import annotations
 
@@ -61,16 +62,19 @@ def clip_doubted(measured_share: float) -> bool:
 
 def probability(support: float,
                 knots: Sequence[Tuple[float, float]] = SUPPORT_TO_PROBABILITY,
-                doubted_clip: bool = False) -> float:
+                doubted_clip: bool = False, short_segment: bool = False) -> float:
     """The calibrated confidence of a frame whose support is `support`
     (0 stays 0: a frame without evidence of its own is never likely); in a
-    doubted clip (clip_doubted) the support itself, below 0.5."""
+    doubted clip (clip_doubted) the support itself, below 0.5; below 0.5 too
+    on a doubted frame and in a short segment (short_segment_frames)."""
     if support <= 0.0 or not knots:
         return max(0.0, support)
     if doubted_clip:
         return min(support, DOUBTED_MAX_PROBABILITY)
     value = _interpolated(support, knots)
-    return min(value, DOUBTED_MAX_PROBABILITY) if support < DOUBTED_SUPPORT else value
+    if support < DOUBTED_SUPPORT or short_segment:
+        return min(value, DOUBTED_MAX_PROBABILITY)
+    return value
 
 
 def _interpolated(support: float, knots: Sequence[Tuple[float, float]]) -> float:

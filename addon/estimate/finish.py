@@ -138,10 +138,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     short = calibration.short_segment_frames(segments) if calibrated else set()
 
     def reported(support: float, frame: Optional[int] = None) -> float:
-        if not calibrated:
-            return support
-        value = calibration.probability(support, doubted_clip=doubted)
-        return min(value, calibration.DOUBTED_MAX_PROBABILITY) if frame in short else value
+        return calibration.probability(support, doubted_clip=doubted,
+                                       short_segment=frame in short) if calibrated else support
     if track.initial and track.initial.get("confidence") is not None:
         track.initial["confidence"] = reported(track.initial["confidence"],
                                                track.initial.get("frame"))

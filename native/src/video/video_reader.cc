@@ -164,7 +164,8 @@ class Decoder {
   // OpenCV's FFmpeg backend (bicubic, swscale's default colour matrix) so
   // tracks match those read through it; scaled, an area average.
   void ToImage(cv::Mat* out, bool gray, cv::Size size = cv::Size()) {
-    if (gray && (ToGrayFromLuma(out, size) || ToGrayFromDeepRgb(out, size)))
+    if (gray && (ToGrayFromLuma(out, size) || ToGrayFromDeepLuma(out, size) ||
+                 ToGrayFromDeepRgb(out, size)))
       return;
     const AVFrame* f = frame_;
     const cv::Size to =
@@ -193,7 +194,6 @@ class Decoder {
   bool ToGrayFromLuma(cv::Mat* out, cv::Size size) {
     const AVFrame* f = frame_;
     bool full_range = f->color_range == AVCOL_RANGE_JPEG;
-    if (ToGrayFromDeepLuma(out, size, full_range)) return true;
     switch (static_cast<AVPixelFormat>(f->format)) {
       case AV_PIX_FMT_YUVJ420P:
       case AV_PIX_FMT_YUVJ422P:
@@ -237,8 +237,9 @@ class Decoder {
   // 10-bit H.265), whose luma swscale would convert whole at full size (a
   // 4K ProRes frame: more than its decoding's share): reduced in 16 bits,
   // then brought to 8 bits and to full range in one step.
-  bool ToGrayFromDeepLuma(cv::Mat* out, cv::Size size, bool full_range) {
+  bool ToGrayFromDeepLuma(cv::Mat* out, cv::Size size) {
     const AVFrame* f = frame_;
+    const bool full_range = f->color_range == AVCOL_RANGE_JPEG;
     int bits = 0;
     switch (static_cast<AVPixelFormat>(f->format)) {
       case AV_PIX_FMT_YUV420P10LE:
@@ -318,8 +319,9 @@ class Decoder {
   bool flushed_ = false;
 };
 
-// The first frame of one image file as BGR and/or gray, at the image's own
-// size; the message says why not.
+// The first frame of one image file as BGR at the image's own size and/or
+// gray reduced to gray_size (empty: its own size), and the size it has;
+// the message says why not.
 std::string DecodeImage(const std::string& path, cv::Mat* bgr,
                         cv::Mat* gray = nullptr, cv::Size gray_size = {},
                         cv::Size* decoded = nullptr) {
