@@ -4,6 +4,7 @@
 #include "sunlapse/common/angles.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -236,11 +237,28 @@ struct SkyEvidence::Impl {
       if (cx < 0 || cy < 0 || cx >= gw || cy >= gh) return -1;
       return cell[static_cast<size_t>(cy) * gw + cx];
     };
-    right.assign(s_count, -1);
+    // Each sample's neighbours in its own group, once: the band pass below
+    // visits them for every direction (3000 times), and the grid lookups
+    // with their bounds and group checks cost as much as the rays.
+    // next[i]: right and lower neighbours (a boundary is a pair of them);
+    // around[i]: the 8 around it (the band grows through them).
+    std::vector<std::array<int32_t, 2>> next(s_count);
+    std::vector<std::array<int32_t, 8>> around(s_count);
     for (int i = 0; i < s_count; ++i) {
-      const int32_t j = at(cells[i].first + 1, cells[i].second);
-      if (j >= 0 && group[j] == group[i]) right[i] = j;
+      const auto [cx, cy] = cells[i];
+      auto same = [&](int32_t j) {
+        return j >= 0 && group[j] == group[i] ? j : -1;
+      };
+      next[i] = {same(at(cx + 1, cy)), same(at(cx, cy + 1))};
+      int k = 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (dx != 0 || dy != 0) around[i][k++] = same(at(cx + dx, cy + dy));
+        }
+      }
     }
+    right.resize(s_count);
+    for (int i = 0; i < s_count; ++i) right[i] = next[i][0];
     std::vector<std::vector<int32_t>> band_of(grid.size());
     const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
     const int steps = o.band_steps;
@@ -262,30 +280,22 @@ struct SkyEvidence::Impl {
                            dir, 0.f, far, occluded.data());
       std::vector<uint8_t> lit(s_count, 0);
       for (size_t k = 0; k < facing.size(); ++k) lit[facing[k]] = !occluded[k];
-      // Boundary samples, then grown by `steps` grid steps within the group.
+      // Boundary samples (in sample order), then grown by `steps` grid
+      // steps within the group.
       std::vector<int> dist(s_count, -1), queue;
       for (int i = 0; i < s_count; ++i) {
-        const auto [cx, cy] = cells[i];
-        const int32_t nb[4] = {at(cx + 1, cy), at(cx - 1, cy), at(cx, cy + 1),
-                               at(cx, cy - 1)};
-        for (int32_t j : nb) {
-          if (j >= 0 && group[j] == group[i] && lit[j] != lit[i]) {
-            dist[i] = 0, queue.push_back(i);
-            break;
-          }
+        for (int32_t j : next[i]) {
+          if (j >= 0 && lit[j] != lit[i]) dist[i] = dist[j] = 0;
         }
+      }
+      for (int i = 0; i < s_count; ++i) {
+        if (dist[i] == 0) queue.push_back(i);
       }
       for (size_t q = 0; q < queue.size(); ++q) {
         const int i = queue[q];
         if (dist[i] >= steps) continue;
-        const auto [cx, cy] = cells[i];
-        for (int dy = -1; dy <= 1; ++dy) {
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int32_t j = at(cx + dx, cy + dy);
-            if (j >= 0 && dist[j] < 0 && group[j] == group[i]) {
-              dist[j] = dist[i] + 1, queue.push_back(j);
-            }
-          }
+        for (int32_t j : around[i]) {
+          if (j >= 0 && dist[j] < 0) dist[j] = dist[i] + 1, queue.push_back(j);
         }
       }
       for (int i : queue) band_of[d].push_back(lit[i] ? i : ~i);

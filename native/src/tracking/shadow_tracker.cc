@@ -57,13 +57,12 @@ struct ShadowTracker::Impl {
   cv::Mat1i ground_index;  // H x W, -1 elsewhere
   // Everything a ground pixel needs in one cache line: the band's pixels
   // are scattered over the frame, and separate arrays cost a miss each.
+  // Kept small: the map is made on the tracker's first frame, and at 1080p
+  // its half a million pixels' first writes cost more than their rays.
   struct GroundPixel {
     Eigen::Vector3f origin =
         Eigen::Vector3f::Zero();  // lifted along the normal
     Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
-    Eigen::Vector3f dpdx =
-        Eigen::Vector3f::Zero();  // ground point per pixel step
-    Eigen::Vector3f dpdy = Eigen::Vector3f::Zero();
     float albedo = 1.f;  // relative, median 1
     cv::Point px;
   };
@@ -96,6 +95,7 @@ struct ShadowTracker::Impl {
   std::vector<float> band_origin, band_x, band_y;
   std::vector<Eigen::Vector3f> band_normal;
   std::vector<uint8_t> occluded;
+  std::vector<float> lit_origin;  // LitOf's scratch
   AffineFit fit;
   int64_t rays_cast = 0, evaluations = 0;  // counters of the current frame
 
@@ -110,50 +110,51 @@ struct ShadowTracker::Impl {
 
   void MapGround() {
     ground_index = cv::Mat1i(H, W, -1);
-    std::vector<double> px;
     const int y0 = o.ignore_top_rows, y1 = H - o.ignore_bottom_rows;
-    px.reserve(2 * static_cast<size_t>(std::max(0, y1 - y0)) * W);
-    for (int y = y0; y < y1; ++y) {
-      for (int x = 0; x < W; ++x) px.insert(px.end(), {double(x), double(y)});
-    }
-    const int64_t n = static_cast<int64_t>(px.size() / 2);
-    Hits hits(n);
-    scene.IntersectPixels(camera, n, px.data(), hits.buffers());
     const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
-    int64_t on_ground = 0;
-    for (int64_t i = 0; i < n; ++i)
-      on_ground += hits.hit(i) && IsGround(hits.object_id[i]);
-    ground.reserve(static_cast<size_t>(on_ground));
-    for (int64_t i = 0; i < n; ++i) {
-      if (!hits.hit(i) || !IsGround(hits.object_id[i])) continue;
-      const int x = static_cast<int>(px[2 * i]),
-                y = static_cast<int>(px[2 * i + 1]);
-      ground_index(y, x) = static_cast<int>(ground.size());
-      GroundPixel gp;
-      gp.px = cv::Point(x, y);
-      gp.normal = hits.normal(i);
-      gp.origin = hits.point(i) + lift * gp.normal;
-      ground.push_back(gp);
+    ground.reserve(static_cast<size_t>(std::max(0, y1 - y0)) * W);
+    // A few rows at a time: the rays' buffers stay small and warm.
+    constexpr int kRows = 16;
+    std::vector<double> px;
+    Hits hits;
+    for (int ya = y0; ya < y1; ya += kRows) {
+      const int yb = std::min(y1, ya + kRows);
+      px.clear();
+      for (int y = ya; y < yb; ++y) {
+        for (int x = 0; x < W; ++x) px.insert(px.end(), {double(x), double(y)});
+      }
+      const int64_t n = static_cast<int64_t>(px.size() / 2);
+      if (static_cast<int64_t>(hits.object_id.size()) != n) hits = Hits(n);
+      scene.IntersectPixels(camera, n, px.data(), hits.buffers());
+      for (int64_t i = 0; i < n; ++i) {
+        if (!hits.hit(i) || !IsGround(hits.object_id[i])) continue;
+        const int x = static_cast<int>(px[2 * i]),
+                  y = static_cast<int>(px[2 * i + 1]);
+        ground_index(y, x) = static_cast<int>(ground.size());
+        GroundPixel gp;
+        gp.px = cv::Point(x, y);
+        gp.normal = hits.normal(i);
+        gp.origin = hits.point(i) + lift * gp.normal;
+        ground.push_back(gp);
+      }
     }
     tag.assign(ground.size(), 0);
     slot.assign(ground.size(), 0);
-    // How the ground point moves per pixel, from neighbouring ground pixels.
-    auto point = [&](int g) { return ground[g].origin; };
-    auto derivative = [&](int g, int dx, int dy) -> Eigen::Vector3f {
-      const cv::Point p = ground[g].px;
-      const cv::Point a(p.x - dx, p.y - dy), b(p.x + dx, p.y + dy);
-      const cv::Rect frame(0, 0, W, H);
-      const int ga = frame.contains(a) ? ground_index(a) : -1;
-      const int gb = frame.contains(b) ? ground_index(b) : -1;
-      if (ga >= 0 && gb >= 0) return 0.5f * (point(gb) - point(ga));
-      if (gb >= 0) return point(gb) - point(g);
-      if (ga >= 0) return point(g) - point(ga);
-      return Eigen::Vector3f::Zero();
-    };
-    for (int g = 0; g < static_cast<int>(ground.size()); ++g) {
-      ground[g].dpdx = derivative(g, 1, 0);
-      ground[g].dpdy = derivative(g, 0, 1);
-    }
+  }
+
+  // How ground pixel g's point moves per pixel step (dx, dy), from its
+  // neighbouring ground pixels; only sub-pixel rays need it.
+  Eigen::Vector3f Step(int g, int dx, int dy) const {
+    const cv::Point p = ground[g].px;
+    const cv::Point a(p.x - dx, p.y - dy), b(p.x + dx, p.y + dy);
+    const cv::Rect frame(0, 0, W, H);
+    const int ga = frame.contains(a) ? ground_index(a) : -1;
+    const int gb = frame.contains(b) ? ground_index(b) : -1;
+    if (ga >= 0 && gb >= 0)
+      return 0.5f * (ground[gb].origin - ground[ga].origin);
+    if (gb >= 0) return ground[gb].origin - ground[g].origin;
+    if (ga >= 0) return ground[g].origin - ground[ga].origin;
+    return Eigen::Vector3f::Zero();
   }
 
   // Shading of ground pixel g toward `toward_sun` given its occlusion flag.
@@ -164,7 +165,10 @@ struct ShadowTracker::Impl {
   // Lit flags of ground indices `ids` toward d (1 lit, 0 shadow).
   std::vector<uint8_t> LitOf(const std::vector<int>& ids,
                              const Eigen::Vector3f& d) {
-    std::vector<float> org(3 * ids.size());
+    // The origins' buffer is kept: the whole ground's is megabytes, and
+    // fresh pages cost more than the copy.
+    std::vector<float>& org = lit_origin;
+    org.resize(3 * ids.size());
     for (size_t i = 0; i < ids.size(); ++i) {
       for (int k = 0; k < 3; ++k) org[3 * i + k] = ground[ids[i]].origin[k];
     }
@@ -227,13 +231,17 @@ struct ShadowTracker::Impl {
   // pixels seed the band as the fit will sample (LoadBand keeps at most
   // max_band_pixels of it), every so many along the boundary.
   // `shadowed` (optional) receives the boundary pixels on the shadow side.
+  // `lit_given` (optional): the candidates' LitOf toward d, already cast.
   std::vector<int> BandAround(const std::vector<int>& candidates,
                               const Eigen::Vector3f& d, bool thin = false,
-                              std::vector<int>* shadowed = nullptr) {
+                              std::vector<int>* shadowed = nullptr,
+                              const std::vector<uint8_t>* lit_given = nullptr) {
     boundary.clear();
     if (shadowed) shadowed->clear();
     if (candidates.empty()) return {};
-    const std::vector<uint8_t> lit = LitOf(candidates, d);
+    std::vector<uint8_t> cast;
+    if (!lit_given) cast = LitOf(candidates, d);
+    const std::vector<uint8_t>& lit = lit_given ? *lit_given : cast;
     ++epoch;
     for (size_t i = 0; i < candidates.size(); ++i) {
       tag[candidates[i]] = epoch;
@@ -375,11 +383,19 @@ struct ShadowTracker::Impl {
       if (i + 8 < m)
         __builtin_prefetch(&frame.at<float>(ground[picked[i + 8]].px));
       const GroundPixel& gp = ground[picked[i]];
-      for (int sy = 0; sy < k; ++sy) {
-        for (int sx = 0; sx < k; ++sx) {
-          const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
-          const Eigen::Vector3f q = gp.origin + ox * gp.dpdx + oy * gp.dpdy;
-          band_origin.insert(band_origin.end(), {q.x(), q.y(), q.z()});
+      if (k == 1) {
+        band_origin.insert(band_origin.end(),
+                           {gp.origin.x(), gp.origin.y(), gp.origin.z()});
+      } else {
+        const Eigen::Vector3f dpdx = Step(picked[i], 1, 0),
+                              dpdy = Step(picked[i], 0, 1);
+        for (int sy = 0; sy < k; ++sy) {
+          for (int sx = 0; sx < k; ++sx) {
+            const float ox = (sx + 0.5f) / k - 0.5f,
+                        oy = (sy + 0.5f) / k - 0.5f;
+            const Eigen::Vector3f q = gp.origin + ox * dpdx + oy * dpdy;
+            band_origin.insert(band_origin.end(), {q.x(), q.y(), q.z()});
+          }
         }
       }
       band_normal.push_back(gp.normal);
@@ -617,7 +633,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   RobustAffineFit(static_cast<int>(all.size()), x.data(), y.data(), nullptr, 1,
                   scale, 4, &fit);
   std::vector<int> shadowed;
-  s.band = s.BandAround(all, df, false, &shadowed);
+  s.band = s.BandAround(all, df, false, &shadowed, &lit);
   s.FindEdgeCasters(shadowed, d);
   s.frames_since_refresh = 0;
   cv::Mat1b near_edge(s.H, s.W, uint8_t(0));
