@@ -360,7 +360,8 @@ def _run(argv, interrupt):
         run = job.prepare_job(
             context, collection=collection, ground=args.ground, frames=frames,
             method=args.method, smoothing=args.smoothing,
-            times_file=times_path, utc_offset=args.utc_offset, place=place_flags(args))
+            times_file=times_path, utc_offset=args.utc_offset, place=place_flags(args),
+            clip=clip)
         clip, numbers, options = run.clip, run.frames, run.options
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)

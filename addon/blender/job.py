@@ -49,12 +49,13 @@ def ground_names(settings, model=None):
 
 
 def gather_all(context, settings=None, movieclip=None, collection=None,
-               camera_obj=None):
+               camera_obj=None, clip=None):
     """Model, camera and clip of the current scene; raises gather.SceneError.
     AR inserts are never part of the model (with Model empty, every visible
-    mesh would otherwise count)."""
+    mesh would otherwise count). `clip`: the clip already gathered (each
+    gathering loads a frame in Blender and opens the file natively)."""
     settings = settings or context.scene.sunlapse
-    clip = gather.gather_clip(context, movieclip)
+    clip = clip or gather.gather_clip(context, movieclip)
     clip_obj = movieclip or gather.active_movieclip(context)
     cam = gather.gather_camera(context, camera_obj or settings.camera, clip, clip_obj)
     model = gather.gather_model(context, collection or settings.model_collection,
@@ -96,16 +97,17 @@ def exif_times(clip, frames, tz):
 
 def prepare_job(context, settings=None, collection=None, ground=None, frames=None,
                 method=None, smoothing=None, times_file=None, utc_offset=None,
-                place: Optional[PlaceTimeFlags] = None, warnings=None) -> RunJob:
+                place: Optional[PlaceTimeFlags] = None, warnings=None,
+                clip=None) -> RunJob:
     """Everything a run needs, gathered on the main thread (bpy reads only,
     and the panel's place filled from the frames' GPS). `times_file` /
     `utc_offset` override the panel's Frame Times and UTC Offset, `place`
     the place and time (the CLI's flags: place.place_and_time). The
     camera's warnings go to `warnings` (a list) when given, else to
-    stdout."""
+    stdout. `clip`: the clip when the caller gathered it already."""
     settings = settings or context.scene.sunlapse
     native_loader.require()
-    model, cam, clip = gather_all(context, settings, collection=collection)
+    model, cam, clip = gather_all(context, settings, collection=collection, clip=clip)
     names = ground or ground_names(settings, model) or gather.guess_ground(model, cam)
     missing = [g for g in names if g not in model.names]
     if missing:

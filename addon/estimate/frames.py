@@ -37,9 +37,26 @@ class FrameSource:
     sequential reads cost nothing extra, out-of-order ones seek."""
 
     def __init__(self, reader, clip_frame_start: int, next_index: int):
-        self.reader, self.start, self.next = reader, clip_frame_start, next_index
+        self._reader, self.start, self.next = reader, clip_frame_start, next_index
+        self._path: Optional[str] = None
         # The first 0-based index past the clip's end, once known.
         self.end: Optional[int] = None
+
+    @classmethod
+    def opened_when_read(cls, path: str, clip_frame_start: int) -> "FrameSource":
+        """A source whose reader is opened by its first read: the whole-clip
+        estimate streams its frames and reads few or none this way, and
+        opening a 4K clip costs a decoded frame."""
+        source = cls(None, clip_frame_start, 0)
+        source._path = path
+        return source
+
+    @property
+    def reader(self):
+        if self._reader is None:
+            assert self._path is not None
+            self._reader = open_clip(self._path, 0)
+        return self._reader
 
     def why_not(self) -> str:
         """Why the last read() gave no frame (the reader's own report)."""

@@ -39,8 +39,11 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     # in time, so an out-of-order frame is tracked where it belongs.
     visit = [frames[i] for i in clock.chronological(frames, times)]
     first = visit[0] - clip_frame_start
-    source = clip_frames.FrameSource(clip_frames.open_clip(clip_path, first), clip_frame_start,
-                                     first)
+    if options.method == "default" and options.initial_sun is None:
+        source = clip_frames.FrameSource.opened_when_read(clip_path, clip_frame_start)
+    else:
+        source = clip_frames.FrameSource(clip_frames.open_clip(clip_path, first),
+                                         clip_frame_start, first)
     north = options.north_offset_deg
     track = trackfile.Track(
         frame_start=clip_frame_start, north_offset_deg=north,

@@ -1016,9 +1016,6 @@ class _ClipReads:
         self.stride = notes.note_stride(camera)
         self.samples: Dict[int, np.ndarray] = {}
         self.pass_stream: Any = None
-        # The frames stream reduced to the estimate's working size: a clip
-        # of another size than the camera's would be reduced to it silently.
-        clip_frames.check_clip_size(source.reader.width, source.reader.height, camera)
 
     def read_gray(self, f: int) -> Gray:
         try:
@@ -1033,7 +1030,7 @@ class _ClipReads:
     def open_stream(self, fs: Sequence[int], near: bool, size: Tuple[int, int]):
         native, camera = self.native, self.camera
         try:
-            return native.FrameStream(
+            frame_stream = native.FrameStream(
                 self.clip_path, [f - self.source.start for f in fs],
                 native.FrameStreamOptions(gamma=self.gamma, near=near, keep_bgr=near,
                                           width=size[0], height=size[1],
@@ -1041,6 +1038,10 @@ class _ClipReads:
                                           bgr_height=-(-camera.height // self.stride)))
         except ValueError as e:
             raise EstimateError(f"cannot read the clip: {e}")
+        # The frames stream reduced to the estimate's working size: a clip
+        # of another size than the camera's would be reduced to it silently.
+        clip_frames.check_clip_size(frame_stream.width, frame_stream.height, camera)
+        return frame_stream
 
     def stream(self, fs: Sequence[int], near: bool, size: Tuple[int, int]):
         """The frames in order at `size`, decoded ahead on a native thread
