@@ -56,7 +56,7 @@ struct FrameStream::Impl {
       : options(o),
         path(p),
         indices(std::move(idx)),
-        reader(p),
+        reader(p, !o.keep_bgr),
         table(LinearGrayTable(o.gamma)) {}
 
   // Float frames whose consumers have let go are filled again: a fresh
@@ -176,7 +176,8 @@ struct FrameStream::Impl {
     decoders = n;
     extra_readers.reserve(n - 1);
     for (int t = 1; t < n; ++t)
-      extra_readers.push_back(std::make_unique<VideoReader>(path));
+      extra_readers.push_back(
+          std::make_unique<VideoReader>(path, !options.keep_bgr));
     const bool near = options.near && n == 1;
     threads.emplace_back([this, near] { Run(reader, near); });
     for (auto& r : extra_readers) {

@@ -54,7 +54,8 @@ class Decoder {
   }
 
   // Empty on success, else why the file cannot be read.
-  std::string Open(const std::string& path, bool single_image) {
+  std::string Open(const std::string& path, bool single_image,
+                   bool gray_only = false) {
     QuietFfmpeg();
     AVDictionary* options = nullptr;
     // A single image: never expand '%d' or globs in its name.
@@ -91,6 +92,16 @@ class Decoder {
     codec_->max_pixels = kMaxPixels;
     codec_->thread_count =
         single_image ? 1 : 0;  // 0: FFmpeg picks (one per core)
+    // Intra-only frames (ProRes, DNxHD) are independent: slice threads put
+    // every core on each frame, so a lone frame after a seek (SeekNear)
+    // decodes as fast as one read in order; frame threads would give it one
+    // core. In order, both are as fast.
+    const AVCodecDescriptor* described = avcodec_descriptor_get(codec->id);
+    if (!single_image && described != nullptr &&
+        (described->props & AV_CODEC_PROP_INTRA_ONLY) != 0 &&
+        (codec->capabilities & AV_CODEC_CAP_SLICE_THREADS) != 0)
+      codec_->thread_type = FF_THREAD_SLICE;
+    if (gray_only) codec_->flags |= AV_CODEC_FLAG_GRAY;
     if ((err = avcodec_open2(codec_, codec, nullptr)) < 0) return AvError(err);
     packet_ = av_packet_alloc();
     frame_ = av_frame_alloc();
@@ -388,7 +399,8 @@ struct VideoReader::Movie {
   }
 };
 
-VideoReader::VideoReader(const std::string& path) : path_(path) {
+VideoReader::VideoReader(const std::string& path, bool gray_only)
+    : path_(path), gray_only_(gray_only) {
   if (!fs::exists(path)) {
     throw std::invalid_argument("path: no such file: " + path);
   }
@@ -422,7 +434,8 @@ VideoReader::VideoReader(const std::string& path) : path_(path) {
     return;
   }
   movie_ = std::make_unique<Movie>();
-  const std::string error = movie_->decoder.Open(path, /*single_image=*/false);
+  const std::string error =
+      movie_->decoder.Open(path, /*single_image=*/false, gray_only);
   if (!error.empty()) {
     throw std::invalid_argument("path: cannot open video " + path + " (" +
                                 error + ")");
@@ -501,6 +514,7 @@ void VideoReader::Wanted::Release() const {
 }
 
 bool VideoReader::Read(cv::Mat* bgr) {
+  if (gray_only_) throw std::logic_error("VideoReader: opened for gray only");
   Wanted want;
   want.bgr = bgr;
   return is_sequence_ ? ReadSequence(want) : ReadMovie(want);
@@ -515,6 +529,8 @@ bool VideoReader::ReadGray(cv::Mat* gray, cv::Size size) {
 
 bool VideoReader::ReadGrayAndBgr(cv::Mat* gray, cv::Size gray_size,
                                  cv::Mat* bgr, cv::Size bgr_size) {
+  if (gray_only_ && bgr != nullptr)
+    throw std::logic_error("VideoReader: opened for gray only");
   const Wanted want{gray, gray_size, bgr, bgr_size};
   return is_sequence_ ? ReadSequence(want) : ReadMovie(want);
 }

@@ -340,6 +340,37 @@ TEST(VideoReader, ReadsGrayFromA10BitLumaPlaneAsFromAn8BitOne) {
   }
 }
 
+TEST(VideoReader, AGrayOnlyReaderGivesTheSameGrayAndRefusesColour) {
+  // ProRes skips its colour planes when asked for gray only: the luma must
+  // not change, and nothing may hand out the planes it left undecoded.
+  const fs::path d = TempDir("gray_only");
+  const std::string src = (d / "ramp.avi").string();
+  {
+    cv::VideoWriter w(src, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                      cv::Size(128, 96));
+    ASSERT_TRUE(w.isOpened());
+    for (int i = 0; i < 4; ++i) w.write(Ramp(128, 96));
+  }
+  const std::string deep = (d / "deep.mov").string();
+  if (!Ffmpeg("-i " + src +
+              " -c:v prores_ks -profile:v 3 -pix_fmt yuv422p10le " + deep)) {
+    GTEST_SKIP() << "ffmpeg with prores_ks is not available";
+  }
+  VideoReader full(deep), gray(deep, /*gray_only=*/true);
+  for (int i = 0; i < 4; ++i) {
+    cv::Mat a, b;
+    ASSERT_TRUE(full.ReadGray(&a, cv::Size(64, 48)));
+    ASSERT_TRUE(gray.ReadGray(&b, cv::Size(64, 48)));
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << "frame " << i;
+  }
+  cv::Mat bgr, g;
+  ASSERT_TRUE(gray.Seek(0));
+  EXPECT_THROW(gray.Read(&bgr), std::logic_error);
+  EXPECT_THROW(gray.ReadGrayAndBgr(&g, cv::Size(), &bgr, cv::Size()),
+               std::logic_error);
+}
+
 TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
   const fs::path d = TempDir("near");
   const std::string src = NumberedMovie(d, 120);

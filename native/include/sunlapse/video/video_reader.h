@@ -46,7 +46,11 @@ class VideoReader {
   // (frame_0001.png, as Blender's MovieClip stores it). Throws
   // std::invalid_argument when the file is missing or cannot be decoded, or
   // its frames are larger than kMaxFramePixels.
-  explicit VideoReader(const std::string& path);
+  // `gray_only`: the reader will only be asked for gray (ReadGray); a
+  // movie's decoder may then skip the colour planes (FFmpeg's ProRes
+  // decoder does: a third of its time), and Read / ReadGrayAndBgr throw
+  // std::logic_error.
+  explicit VideoReader(const std::string& path, bool gray_only = false);
   ~VideoReader();
   VideoReader(const VideoReader&) = delete;
   VideoReader& operator=(const VideoReader&) = delete;
@@ -126,6 +130,7 @@ class VideoReader {
   std::unique_ptr<ScaledJpeg> jpeg_;  // made at a sequence's first JPEG read
   std::string path_;
   bool is_sequence_ = false;
+  bool gray_only_ = false;
   ImageSequence sequence_;  // when is_sequence_
   int width_ = 0, height_ = 0, num_frames_ = 0, position_ = 0;
   bool num_frames_exact_ = false;
