@@ -54,7 +54,9 @@ from ..core.trackfile import Sunlight
 REFERENCE_FRAMES = 24
 # On a short clip the reference frames are a large share of all decoding:
 # those that are frames of the run are kept for the pass (up to this many
-# bytes) instead of being decoded again.
+# bytes) instead of being decoded again. So they are on a clip of any length
+# whose frames decode on their own (stills, ProRes): the pass skips them at
+# no cost, where a long-GOP video would decode them anyway.
 SHORT_CLIP_FRAMES = 4 * REFERENCE_FRAMES
 REFERENCE_KEEP_BYTES = 256 << 20
 # The estimate works on frames at most this wide: larger ones are reduced
@@ -582,7 +584,8 @@ class _WholeClip:
         self.mark("table")
         reference: List[Optional[np.ndarray]] = []
         kept: Dict[int, np.ndarray] = {}
-        budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES else 0
+        independent = getattr(reference_frames, "frames_independent", False)
+        budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES or independent else 0
         wanted = set(frames)
         for f, image in reference_frames:
             gray = _frame(image)
@@ -1043,10 +1046,10 @@ class _ClipReads:
         clip_frames.check_clip_size(frame_stream.width, frame_stream.height, camera)
         return frame_stream
 
-    def stream(self, fs: Sequence[int], near: bool, size: Tuple[int, int]):
+    def stream(self, fs: Sequence[int], near: bool, size: Tuple[int, int]) -> "_Streamed":
         """The frames in order at `size`, decoded ahead on a native thread
         (started now, before the first is asked for)."""
-        return self.streamed(self.open_stream(fs, near, size), near)
+        return _Streamed(self, self.open_stream(fs, near, size), near)
 
     def frame_source(self, fs: Sequence[int], size: Tuple[int, int]):
         """The pass's frames at `size`: a native stream, and the index it
@@ -1070,6 +1073,18 @@ class _ClipReads:
 
     def wait_seconds(self) -> float:
         return 0.0 if self.pass_stream is None else self.pass_stream.wait_seconds
+
+
+class _Streamed:
+    """A native stream's frames as (frame, gray or why not), in order, and
+    whether the clip's frames decode on their own (frames_independent)."""
+
+    def __init__(self, reads: _ClipReads, frame_stream, near: bool):
+        self.frames_independent = bool(frame_stream.frames_independent)
+        self._frames = reads.streamed(frame_stream, near)
+
+    def __iter__(self):
+        return self._frames
 
 
 def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Sequence[int],

@@ -424,6 +424,10 @@ void BindEstimate(py::module_& m) {
            py::arg("options") = FrameStreamOptions())
       .def_property_readonly("width", &FrameStream::width)
       .def_property_readonly("height", &FrameStream::height)
+      .def_property_readonly("frames_independent",
+                             &FrameStream::frames_independent,
+                             "Each frame decodes on its own (an image "
+                             "sequence, an intra-only codec).")
       .def_property_readonly("wait_seconds", &FrameStream::wait_seconds)
       .def("__len__", &FrameStream::size)
       .def("__iter__", [](py::object self) { return self; })

@@ -470,3 +470,41 @@ def test_the_clock_puts_night_frames_in_the_dark_unless_it_contradicts_the_foota
     assert wrong.clock_trusted is False and wrong.clock_night == []
     assert len(wrong.clock_contradicted) >= 3
     assert sum(r.sunlight == Sunlight.YES for r in wrong.frames) >= n - 1
+
+
+@pytest.mark.parametrize("independent", [True, False])
+def test_reference_frames_are_kept_on_a_long_clip_whose_frames_decode_alone(
+        world, monkeypatch, independent):
+    """Stills and intra-only video: the pass skips the reference frames at no
+    cost, so they are kept whatever the clip's length; a long-GOP video
+    decodes them again (issue 28)."""
+    monkeypatch.setattr(whole_clip, "SHORT_CLIP_FRAMES", 8)
+    n = 30
+    truth = [path(k, n) for k in range(n)]
+    frames = [draw(world, truth[k], k) for k in range(n)]
+    reads = []
+
+    class Stream:
+        frames_independent = independent
+
+        def __init__(self, fs):
+            self.fs = fs
+
+        def __iter__(self):
+            for f in self.fs:
+                reads.append(f)
+                yield f, frames[f - 1]
+
+    def source(fs, size):
+        reads.extend(fs)
+        index_of = {f: i for i, f in enumerate(fs)}
+        return native.FrameList([(i, frames[f - 1]) for i, f in enumerate(fs)]), index_of
+
+    scene, camera = world[0], world[1]
+    result = whole_clip.estimate(native, scene, camera, list(range(1, n + 1)), None, [0],
+                                 stream=lambda fs, near, size: Stream(fs), source=source)
+    reference = {frame for frame in reads[:whole_clip.REFERENCE_FRAMES]}
+    read_twice = sorted(f for f in set(reads) if reads.count(f) > 1)
+    assert read_twice == ([] if independent else sorted(reference))
+    for k, r in enumerate(result.frames):
+        assert error_deg(r.sun_in_world, truth[k]) < 1.0, k

@@ -241,6 +241,9 @@ double FrameStream::wait_seconds() const {
 }
 
 int FrameStream::width() const { return impl_->reader.width(); }
+bool FrameStream::frames_independent() const {
+  return impl_->reader.frames_independent();
+}
 int FrameStream::size() const {
   return static_cast<int>(impl_->indices.size());
 }

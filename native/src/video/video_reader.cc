@@ -109,6 +109,11 @@ class Decoder {
   }
 
   AVStream* stream() const { return format_->streams[stream_]; }
+  // Every frame a key frame by the codec's nature (ProRes, DNxHD, MJPEG).
+  bool intra_only() const {
+    const AVCodecDescriptor* d = avcodec_descriptor_get(codec_->codec_id);
+    return d != nullptr && (d->props & AV_CODEC_PROP_INTRA_ONLY) != 0;
+  }
   AVFormatContext* format() const { return format_; }
   const AVFrame* frame() const { return frame_; }
 
@@ -753,6 +758,10 @@ int VideoReader::KeyFrameAtOrBefore(int index) const {
   if (!std::isfinite(at)) return -1;
   const int64_t key = std::llround(at);
   return key >= 0 && key <= index ? static_cast<int>(key) : -1;
+}
+
+bool VideoReader::frames_independent() const {
+  return is_sequence_ || movie_->decoder.intra_only();
 }
 
 int VideoReader::SeekNear(int index) {

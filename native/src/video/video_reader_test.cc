@@ -371,6 +371,23 @@ TEST(VideoReader, AGrayOnlyReaderGivesTheSameGrayAndRefusesColour) {
                std::logic_error);
 }
 
+TEST(VideoReader, SaysWhetherItsFramesDecodeOnTheirOwn) {
+  // Skipping frames saves their decoding only where each decodes alone.
+  const fs::path d = TempDir("independent");
+  const std::string mjpeg = NumberedMovie(d, 30);
+  EXPECT_TRUE(VideoReader(mjpeg).frames_independent());
+  const std::string h264 = (d / "long_gop.mp4").string();
+  if (!Ffmpeg("-i " + mjpeg + " -c:v libx264 -g 10 -pix_fmt yuv420p " + h264))
+    GTEST_SKIP() << "ffmpeg with libx264 is not available";
+  EXPECT_FALSE(VideoReader(h264).frames_independent());
+  for (int i = 0; i < 2; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "s_%03d.png", i + 1);
+    cv::imwrite((d / name).string(), cv::Mat(24, 32, CV_8UC3, cv::Scalar(i)));
+  }
+  EXPECT_TRUE(VideoReader((d / "s_001.png").string()).frames_independent());
+}
+
 TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
   const fs::path d = TempDir("near");
   const std::string src = NumberedMovie(d, 120);

@@ -105,6 +105,8 @@ class FrameStream : public FrameSource {
   // Seconds Next() spent waiting for the decoder so far (the consumer idle:
   // decoding is the bottleneck when this is most of the run).
   double wait_seconds() const;
+  // The clip's frames decode on their own (VideoReader::frames_independent).
+  bool frames_independent() const;
   int width() const;
   int height() const;
   // How many frames Next() gives in all.

@@ -72,6 +72,9 @@ class VideoReader {
   // 0-based index of the frame the next Read() returns.
   int position() const { return position_; }
   bool is_sequence() const { return is_sequence_; }
+  // Whether each frame decodes on its own (an image sequence, an intra-only
+  // codec): skipping frames then saves their decoding, and seeking is cheap.
+  bool frames_independent() const;
 
   // Reads the next frame as 8-bit BGR. Returns false at the end. A frame that
   // cannot be used (corrupt, another size than the first, a file missing from
