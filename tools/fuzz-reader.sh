@@ -34,12 +34,15 @@ flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer
 clang++-14 "${flags[@]}" -Inative/include \
   $(pkg-config --cflags opencv4 libavformat) \
   native/src/video/video_reader_fuzz.cc native/src/video/video_reader.cc \
+  native/src/video/image_sequence.cc native/src/video/jpeg_scaled.cc \
+  native/src/video/tiff_plain.cc \
   -o "$out/video_reader_fuzz" \
   $(pkg-config --libs libavformat libavcodec libswscale libavutil) \
-  -lopencv_imgproc -lopencv_core
+  $(pkg-config --libs libturbojpeg) -lopencv_imgproc -lopencv_core
 
 # Seeds: 4 frames of 32x24 in every container the target names (the first
-# byte picks the extension: 0 .mp4, 1 .mpg, 2 .gif, 3 .png, 4 .jpg, 5 .avi).
+# byte picks the extension: 0 .mp4, 1 .mpg, 2 .gif, 3 .png, 4 .jpg, 5 .avi,
+# 6 .tif).
 seed() {  # index extension ffmpeg-output-args...
   local i="$1" ext="$2"
   shift 2
@@ -54,6 +57,7 @@ seed 2 .gif -frames:v 4
 seed 3 .png -frames:v 1
 seed 4 .jpg -frames:v 1
 seed 5 .avi -frames:v 4 -c:v mjpeg
+seed 6 .tif -frames:v 1 -pix_fmt rgb48le -compression_algo raw
 # A tiny PNG whose header claims 16000x16000: the reader must refuse it
 # without allocating the frame (FFmpeg skips the header CRC by default).
 ffmpeg -loglevel error -y -f lavfi -i testsrc=size=8x8 -frames:v 1 "$out/seeds/tmp.png"

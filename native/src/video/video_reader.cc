@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "jpeg_scaled.h"
+#include "tiff_plain.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -429,6 +430,16 @@ VideoReader::VideoReader(const std::string& path, bool gray_only)
         return;
       }
     }
+    if (HasTiffName(path)) {
+      // An uncompressed TIFF's size from its header (each decoding thread
+      // opens the clip, and FFmpeg decodes a 50 MB still whole).
+      PlainTiff tiff;
+      if (tiff.Open(path, kMaxFramePixels).empty()) {
+        width_ = tiff.width();
+        height_ = tiff.height();
+        return;
+      }
+    }
     const std::string error = DecodeImage(path, &first);
     if (!error.empty()) {
       throw std::invalid_argument("path: cannot decode image " + path + " (" +
@@ -551,7 +562,7 @@ bool VideoReader::ReadSequence(const Wanted& want) {
     last_.message = "no file " + file;
     return true;
   }
-  if (ReadScaledJpeg(file, want)) return true;
+  if (ReadScaledJpeg(file, want) || ReadPlainTiff(file, want)) return true;
   // Gray at its size from the decoder (reduced before any conversion);
   // colour whole, then reduced as always.
   cv::Size decoded;
@@ -620,6 +631,37 @@ bool VideoReader::ReadScaledJpeg(const std::string& file, const Wanted& want) {
     const cv::Mat* y = jpeg_->Gray(gray_shrink);
     if (y == nullptr) return false;
     *want.gray = reduced(*y, want.gray_size);
+  }
+  last_.width = width_;
+  last_.height = height_;
+  return true;
+}
+
+bool VideoReader::ReadPlainTiff(const std::string& file, const Wanted& want) {
+  if (!HasTiffName(file)) return false;
+  if (!tiff_) tiff_ = std::make_unique<PlainTiff>();
+  cv::Mat rgb;
+  // Another size than the clip's: FFmpeg's read reports it as always.
+  if (!tiff_->Open(file, kMaxFramePixels).empty() || tiff_->width() != width_ ||
+      tiff_->height() != height_ || !tiff_->Read(&rgb))
+    return false;
+  // As FFmpeg's 16-bit RGB is made gray (Decoder::ToGrayFromDeepRgb):
+  // reduced in colour, then weighed, then 8 bits.
+  const bool alpha = rgb.channels() == 4;
+  if (want.gray) {
+    cv::Mat gray16;
+    cv::cvtColor(
+        want.gray_size.empty() ? rgb : AreaReduced(rgb, want.gray_size), gray16,
+        alpha ? cv::COLOR_RGBA2GRAY : cv::COLOR_RGB2GRAY);
+    gray16.convertTo(*want.gray, CV_8U, 255.0 / 65535.0);
+  }
+  if (want.bgr) {
+    // Reduced before the 8-bit conversion (a background's colour: within
+    // a level of converting first).
+    cv::Mat bgr16;
+    cv::cvtColor(want.bgr_size.empty() ? rgb : AreaReduced(rgb, want.bgr_size),
+                 bgr16, alpha ? cv::COLOR_RGBA2BGR : cv::COLOR_RGB2BGR);
+    bgr16.convertTo(*want.bgr, CV_8U, 255.0 / 65535.0);
   }
   last_.width = width_;
   last_.height = height_;

@@ -31,12 +31,12 @@ const fs::path& FuzzDir() {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
-  static const char* const kExtensions[] = {".mp4", ".mpg", ".gif",
-                                            ".png", ".jpg", ".avi"};
+  static const char* const kExtensions[] = {".mp4", ".mpg", ".gif", ".png",
+                                            ".jpg", ".avi", ".tif"};
   // A name without digits: one image, never a numbered sequence (whose
   // directory scan would see other inputs).
   const fs::path file =
-      FuzzDir() / (std::string("input") + kExtensions[data[0] % 6]);
+      FuzzDir() / (std::string("input") + kExtensions[data[0] % 7]);
   {
     FILE* out = std::fopen(file.c_str(), "wb");
     if (out == nullptr) return 0;

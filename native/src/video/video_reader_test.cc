@@ -1,5 +1,6 @@
 #include "sunlapse/video/video_reader.h"
 #include "temp_dir.h"
+#include "tiff_plain.h"
 
 #include <gtest/gtest.h>
 
@@ -176,6 +177,54 @@ TEST(VideoReader, Reads16BitTiffStillsAsTheir8BitTwins) {
   ASSERT_TRUE(deep.ReadGray(&a, cv::Size(32, 24)));
   EXPECT_EQ(deep.last_frame().status, FrameStatus::kSizeChanged);
   EXPECT_TRUE(a.empty());
+}
+
+TEST(VideoReader, ReadsUncompressedTiffStillsAsFfmpegReadsCompressedOnes) {
+  // Uncompressed 16-bit TIFFs are read from their strips (tiff_plain.h);
+  // the same pictures LZW-compressed go through FFmpeg: the same gray.
+  const fs::path d = TempDir("tiff_plain");
+  cv::Mat deep(96, 128, CV_16UC3);
+  cv::randu(deep, cv::Scalar::all(0), cv::Scalar::all(65536));
+  cv::GaussianBlur(deep, deep, cv::Size(9, 9), 3);
+  const std::vector<int> plain = {cv::IMWRITE_TIFF_COMPRESSION, 1};
+  const std::vector<int> lzw = {cv::IMWRITE_TIFF_COMPRESSION, 5};
+  for (int i = 1; i <= 3; ++i) {
+    const std::string n = "_000" + std::to_string(i) + ".tif";
+    ASSERT_TRUE(cv::imwrite((d / ("plain" + n)).string(), deep, plain));
+    ASSERT_TRUE(cv::imwrite((d / ("lzw" + n)).string(), deep, lzw));
+  }
+  // The plain reader takes the one and leaves the other to FFmpeg.
+  PlainTiff tiff;
+  ASSERT_EQ(tiff.Open((d / "plain_0001.tif").string(), 1 << 20), "");
+  EXPECT_EQ(tiff.Open((d / "lzw_0001.tif").string(), 1 << 20), "compressed");
+  for (cv::Size size : {cv::Size(), cv::Size(32, 24), cv::Size(50, 37)}) {
+    VideoReader a((d / "plain_0001.tif").string()),
+        b((d / "lzw_0001.tif").string());
+    EXPECT_EQ(a.width(), 128);
+    EXPECT_EQ(a.height(), 96);
+    for (int i = 0; i < 3; ++i) {
+      cv::Mat ga, gb, ca, cb;
+      ASSERT_TRUE(a.ReadGrayAndBgr(&ga, size, &ca, cv::Size(32, 24)));
+      ASSERT_TRUE(b.ReadGrayAndBgr(&gb, size, &cb, cv::Size(32, 24)));
+      ASSERT_EQ(a.last_frame().status, FrameStatus::kOk);
+      ASSERT_EQ(ga.type(), CV_8UC1);
+      ASSERT_EQ(ga.size(), gb.size());
+      EXPECT_EQ(cv::norm(ga, gb, cv::NORM_INF), 0.0) << size;
+      ASSERT_EQ(ca.type(), CV_8UC3);
+      EXPECT_LE(cv::norm(ca, cb, cv::NORM_INF), 2.0) << size;
+    }
+  }
+  // A still cut short is reported as undecodable, and reading goes on.
+  const fs::path cut = d / "plain_0002.tif";
+  fs::resize_file(cut, fs::file_size(cut) / 2);
+  VideoReader a((d / "plain_0001.tif").string());
+  cv::Mat g;
+  ASSERT_TRUE(a.ReadGray(&g, cv::Size(32, 24)));
+  ASSERT_TRUE(a.ReadGray(&g, cv::Size(32, 24)));
+  EXPECT_EQ(a.last_frame().status, FrameStatus::kUndecodable);
+  EXPECT_TRUE(g.empty());
+  ASSERT_TRUE(a.ReadGray(&g, cv::Size(32, 24)));
+  EXPECT_EQ(a.last_frame().status, FrameStatus::kOk);
 }
 
 TEST(AreaReduced, HalvingsAreOneAreaAverage) {

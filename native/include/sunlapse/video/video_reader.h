@@ -15,6 +15,7 @@
 namespace sunlapse {
 
 class ScaledJpeg;
+class PlainTiff;
 
 // The display gamma footage is encoded with (sRGB's, about 2.2): the
 // estimate's shading model is linear, so 8-bit values are raised to it.
@@ -127,10 +128,14 @@ class VideoReader {
   // TurboJPEG; false when it was not (no size that gains, not a JPEG, one
   // TurboJPEG refuses, another size than the clip's: FFmpeg reads it then).
   bool ReadScaledJpeg(const std::string& file, const Wanted& want);
+  // The same for an uncompressed 16-bit RGB TIFF read straight from its
+  // strips (tiff_plain.h); false for any other (FFmpeg reads it then).
+  bool ReadPlainTiff(const std::string& file, const Wanted& want);
   bool ReadMovie(const Wanted& want);
 
   std::unique_ptr<Movie> movie_;
   std::unique_ptr<ScaledJpeg> jpeg_;  // made at a sequence's first JPEG read
+  std::unique_ptr<PlainTiff> tiff_;   // made at a sequence's first TIFF read
   std::string path_;
   bool is_sequence_ = false;
   bool gray_only_ = false;
