@@ -2,12 +2,13 @@
 """The whole estimate on camera stills and intra-only video (issue 28)
 against ffmpeg decoding them.
 
-  python3 bench/stills.py [--format jpeg|tiff|prores] [--mp MP] [--length 100]
+  python3 bench/stills.py [--format jpeg|tiff|prores] [--mp MP] [--any-size] [--length 100]
                           [--quality 3] [--grain 12] [--cache DIR]
                           [--blender PATH] [--runs 1]
 
 A sequence like a camera's time-lapse: bench/whole_run.py's 1080p plaza clip
-(made with it first when missing) upscaled to --mp megapixels (16:9), film
+(made with it first when missing) upscaled to --mp megapixels (16:9; both
+sides multiples of 8 as a camera's, unless --any-size), film
 grain added (ffmpeg's noise filter, --grain), --length frames, written as
   jpeg    JPEG stills at quality --quality (ffmpeg's -q:v: 2 best, 31 worst;
           3 is about a camera's "fine"); --mp default 24;
@@ -52,6 +53,9 @@ def parse_args(argv):
                    help="jpeg (default), tiff (16-bit stills) or prores (a 4:2:2 movie)")
     p.add_argument("--mp", type=float, help="megapixels a frame (default 24 for jpeg, 8.3: "
                                             "3840x2160 for tiff and prores)")
+    p.add_argument("--any-size", action="store_true",
+                   help="keep --mp's size with even sides (default: both sides multiples of "
+                        "8, as cameras write them)")
     p.add_argument("--length", type=int, default=100, help="frames (default 100)")
     p.add_argument("--quality", type=int, default=3, help="ffmpeg -q:v (default 3)")
     p.add_argument("--grain", type=int, default=12, help="noise strength (default 12)")
@@ -68,10 +72,14 @@ def parse_args(argv):
     return args
 
 
-def stills_size(mp):
-    """16:9, even sides, about `mp` megapixels."""
-    h = int((mp * 1e6 * 9 / 16) ** 0.5) // 2 * 2
-    return h * 16 // 9 // 2 * 2, h
+def stills_size(mp, any_size=False):
+    """16:9, about `mp` megapixels, both sides multiples of 8 as cameras
+    write them (JPEG's 8x8 blocks: 24 MP is 6528x3672); with `any_size`
+    even sides only (24 MP: 6530x3674, which no camera writes and whose
+    working pixels cut through the blocks, so its JPEGs are decoded whole)."""
+    step = 2 if any_size else 8
+    h = int((mp * 1e6 * 9 / 16) ** 0.5) // step * step
+    return h * 16 // 9 // step * step, h
 
 
 # How each format is written: the name (a printf pattern for stills) and
@@ -88,7 +96,7 @@ FORMATS = {
 def make_stills(args, cache):
     """The sequence or movie (cached): returns (the path the clip opens,
     the path ffmpeg reads, size)."""
-    w, h = stills_size(args.mp)
+    w, h = stills_size(args.mp, args.any_size)
     name, output = FORMATS[args.format]
     quality = f"-q{args.quality}" if args.format == "jpeg" else ""
     folder = os.path.join(cache, f"{args.format}-{w}x{h}-{args.length}{quality}-n{args.grain}")
