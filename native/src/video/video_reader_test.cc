@@ -351,17 +351,23 @@ bool Ffmpeg(const std::string& args) {
              ("ffmpeg -v error -y " + args + " >/dev/null 2>&1").c_str()) == 0;
 }
 
+// `frames` frames of a 128x96 ramp as MJPEG in d/ramp.avi (the source the
+// ffmpeg-made clips are converted from); empty when it cannot be written.
+std::string RampMovie(const fs::path& d, int frames) {
+  const std::string path = (d / "ramp.avi").string();
+  cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                    cv::Size(128, 96));
+  if (!w.isOpened()) return {};
+  for (int i = 0; i < frames; ++i) w.write(Ramp(128, 96));
+  return path;
+}
+
 TEST(VideoReader, ReadsGrayFromA10BitLumaPlaneAsFromAn8BitOne) {
   // ProRes (10-bit 4:2:2) and 10-bit H.264 have their own luma path; the
   // same frames in 8 bits go through the 8-bit one.
   const fs::path d = TempDir("deep");
-  const std::string src = (d / "ramp.avi").string();
-  {
-    cv::VideoWriter w(src, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
-                      cv::Size(128, 96));
-    ASSERT_TRUE(w.isOpened());
-    for (int i = 0; i < 3; ++i) w.write(Ramp(128, 96));
-  }
+  const std::string src = RampMovie(d, 3);
+  ASSERT_FALSE(src.empty());
   const std::string eight = (d / "eight.mkv").string();
   const std::string deep = (d / "deep.mov").string();
   if (!Ffmpeg("-i " + src + " -c:v ffv1 -pix_fmt yuv422p " + eight) ||
@@ -393,13 +399,8 @@ TEST(VideoReader, AGrayOnlyReaderGivesTheSameGrayAndRefusesColour) {
   // ProRes skips its colour planes when asked for gray only: the luma must
   // not change, and nothing may hand out the planes it left undecoded.
   const fs::path d = TempDir("gray_only");
-  const std::string src = (d / "ramp.avi").string();
-  {
-    cv::VideoWriter w(src, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
-                      cv::Size(128, 96));
-    ASSERT_TRUE(w.isOpened());
-    for (int i = 0; i < 4; ++i) w.write(Ramp(128, 96));
-  }
+  const std::string src = RampMovie(d, 4);
+  ASSERT_FALSE(src.empty());
   const std::string deep = (d / "deep.mov").string();
   if (!Ffmpeg("-i " + src +
               " -c:v prores_ks -profile:v 3 -pix_fmt yuv422p10le " + deep)) {
