@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -177,6 +178,87 @@ TEST(VideoReader, Reads16BitTiffStillsAsTheir8BitTwins) {
   ASSERT_TRUE(deep.ReadGray(&a, cv::Size(32, 24)));
   EXPECT_EQ(deep.last_frame().status, FrameStatus::kSizeChanged);
   EXPECT_TRUE(a.empty());
+}
+
+// A baseline TIFF written by hand: w x h, `channels` 16-bit samples a
+// pixel, in strips of `rows` rows, in either byte order; pixel (x, y)'s
+// sample c is 1000 * c + 10 * y + x.
+void WriteTiff(const fs::path& path, bool big, int w, int h, int channels,
+               int rows) {
+  std::string out;
+  auto put = [&](uint64_t v, int n) {
+    for (int i = 0; i < n; ++i)
+      out.push_back(static_cast<char>(v >> (8 * (big ? n - 1 - i : i))));
+  };
+  out += big ? "MM" : "II";
+  put(42, 2);
+  put(8, 4);  // the directory right after the header
+  const int strips = (h + rows - 1) / rows, tags = 10;
+  const uint64_t values = 8 + 2 + 12 * tags + 4;  // after the directory
+  const uint64_t offsets_at = values, counts_at = offsets_at + 4 * strips,
+                 bits_at = counts_at + 4 * strips,
+                 data_at = bits_at + 2 * channels;
+  auto entry = [&](int tag, int type, uint64_t n, uint64_t value) {
+    put(tag, 2);
+    put(type, 2);
+    put(n, 4);
+    if (type == 3 && n == 1) {
+      put(value, 2);
+      put(0, 2);
+    } else {
+      put(value, 4);
+    }
+  };
+  put(tags, 2);
+  entry(256, 3, 1, w);
+  entry(257, 3, 1, h);
+  entry(258, 3, channels, bits_at);
+  entry(259, 3, 1, 1);
+  entry(262, 3, 1, 2);
+  entry(273, 4, strips, offsets_at);
+  entry(277, 3, 1, channels);
+  entry(278, 3, 1, rows);
+  entry(279, 4, strips, counts_at);
+  entry(284, 3, 1, 1);
+  put(0, 4);  // no next directory
+  const uint64_t row_bytes = 2ull * w * channels;
+  for (int s = 0; s < strips; ++s) put(data_at + s * rows * row_bytes, 4);
+  for (int s = 0; s < strips; ++s)
+    put(std::min(rows, h - s * rows) * row_bytes, 4);
+  for (int c = 0; c < channels; ++c) put(16, 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < channels; ++c) put(1000 * c + 10 * y + x, 2);
+  std::ofstream(path, std::ios::binary) << out;
+}
+
+TEST(PlainTiff, ReadsEitherByteOrderRgbOrRgbaInStrips) {
+  const fs::path d = TempDir("tiff_hand");
+  for (bool big : {false, true}) {
+    for (int channels : {3, 4}) {
+      const fs::path path = d / "hand.tif";
+      WriteTiff(path, big, 5, 3, channels, 2);
+      PlainTiff tiff;
+      ASSERT_EQ(tiff.Open(path.string(), 1 << 20), "") << big << channels;
+      cv::Mat rgb;
+      ASSERT_TRUE(tiff.Read(&rgb));
+      ASSERT_EQ(rgb.type(), CV_16UC(channels));
+      ASSERT_EQ(rgb.size(), cv::Size(5, 3));
+      for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 5; ++x)
+          for (int c = 0; c < channels; ++c)
+            ASSERT_EQ(rgb.ptr<uint16_t>(y)[channels * x + c],
+                      1000 * c + 10 * y + x)
+                << big << " " << channels << " " << x << "," << y;
+      // Cut inside its last strip: refused at opening (FFmpeg then reports
+      // the still), never read past the file's end.
+      fs::resize_file(path, fs::file_size(path) - 2);
+      EXPECT_EQ(tiff.Open(path.string(), 1 << 20), "a strip beyond the file");
+      // Larger than allowed: refused before anything is read.
+      WriteTiff(path, big, 5, 3, channels, 2);
+      EXPECT_NE(tiff.Open(path.string(), 14), "");
+    }
+  }
 }
 
 TEST(VideoReader, ReadsUncompressedTiffStillsAsFfmpegReadsCompressedOnes) {
