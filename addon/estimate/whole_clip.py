@@ -62,9 +62,12 @@ REFERENCE_KEEP_BYTES = 256 << 20
 # The estimate works on frames at most this wide: larger ones are reduced
 # (area average, by a power of two) as they are decoded, before they are
 # made linear, and both the sky's evidence and the shadow tracker see them
-# at that size (one ray a pixel: a reduced pixel is already the average the
-# sub-pixel rays model). The tracker's band and ground map grow with the
-# pixels, not its accuracy.
+# at that size. The tracker's band and ground map grow with the pixels, not
+# its accuracy. Its shadow model keeps its sub-pixel rays there (the
+# ShadowTracker's own choice, 2 x 2 below 1280 wide): a working pixel on an
+# edge is partly lit, and one ray a pixel models it as lit or not. With one
+# ray, walls2 read as 24 MP stills erred 1.79 / 5.32 deg in zenith (mean /
+# max) against 0.63 / 1.75 with four.
 WORKING_MAX_WIDTH = 1280
 
 
@@ -610,8 +613,7 @@ class _WholeClip:
         self.directions = [tuple(d) for d in self.sky.directions.tolist()]
         self.spacing_deg = self.sky.spacing_deg
         self.tracker = native.ShadowTracker(self.scene, self.work, self.ground_ids,
-                                            ignore_top_rows=self.top,
-                                            subsamples=1 if self.factor > 1 else 0)
+                                            ignore_top_rows=self.top)
         rest = [f for f in frames if f not in kept]
         if self.source is None:
             frame_source = native.FrameList([(i, self.reduced(self.read_gray(f)))
