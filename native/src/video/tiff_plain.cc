@@ -1,8 +1,6 @@
 #include "tiff_plain.h"
 
 #include <algorithm>
-#include <cctype>
-#include <filesystem>
 #include <fstream>
 #include <map>
 
@@ -64,19 +62,15 @@ class Numbers {
 
 }  // namespace
 
-bool HasTiffName(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return ext == ".tif" || ext == ".tiff";
-}
-
 std::string PlainTiff::Open(const std::string& path, int64_t max_pixels) {
-  path_ = path;
   width_ = height_ = channels_ = rows_per_strip_ = 0;
   strip_offsets_.clear();
   strip_bytes_.clear();
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  // Kept open for Read: a still is opened once.
+  in_.close();
+  in_.clear();
+  in_.open(path, std::ios::binary | std::ios::ate);
+  std::ifstream& in = in_;
   if (!in) return "cannot open the file";
   const uint64_t size = static_cast<uint64_t>(in.tellg());
   uint8_t head[8];
@@ -182,8 +176,8 @@ std::string PlainTiff::Open(const std::string& path, int64_t max_pixels) {
 
 bool PlainTiff::Read(cv::Mat* rgb) {
   if (width_ <= 0) return false;
-  std::ifstream in(path_, std::ios::binary);
-  if (!in) return false;
+  std::ifstream& in = in_;
+  in.clear();
   const size_t row_values = static_cast<size_t>(width_) * channels_;
   buffer_.resize(row_values * height_);
   for (size_t s = 0; s < strip_offsets_.size(); ++s) {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -30,14 +31,11 @@ class PlainTiff {
   bool Read(cv::Mat* rgb);
 
  private:
-  std::string path_;
+  std::ifstream in_;
   bool big_endian_ = false;
   int width_ = 0, height_ = 0, channels_ = 0, rows_per_strip_ = 0;
   std::vector<uint64_t> strip_offsets_, strip_bytes_;
   std::vector<uint16_t> buffer_;
 };
-
-// Whether FFmpeg's image reader would take `path` for a TIFF (by its name).
-bool HasTiffName(const std::string& path);
 
 }  // namespace sunlapse

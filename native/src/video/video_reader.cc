@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -42,6 +43,12 @@ void QuietFfmpeg() {
 }
 
 constexpr int64_t kMaxPixels = VideoReader::kMaxFramePixels;
+
+// Every frame of the codec a key frame by its nature (ProRes, DNxHD, MJPEG).
+bool IntraOnly(AVCodecID id) {
+  const AVCodecDescriptor* d = avcodec_descriptor_get(id);
+  return d != nullptr && (d->props & AV_CODEC_PROP_INTRA_ONLY) != 0;
+}
 
 // One opened video stream and its decoder (a movie, or one image file).
 class Decoder {
@@ -97,9 +104,7 @@ class Decoder {
     // every core on each frame, so a lone frame after a seek (SeekNear)
     // decodes as fast as one read in order; frame threads would give it one
     // core. In order, both are as fast.
-    const AVCodecDescriptor* described = avcodec_descriptor_get(codec->id);
-    if (!single_image && described != nullptr &&
-        (described->props & AV_CODEC_PROP_INTRA_ONLY) != 0 &&
+    if (!single_image && IntraOnly(codec->id) &&
         (codec->capabilities & AV_CODEC_CAP_SLICE_THREADS) != 0)
       codec_->thread_type = FF_THREAD_SLICE;
     if (gray_only) codec_->flags |= AV_CODEC_FLAG_GRAY;
@@ -111,10 +116,7 @@ class Decoder {
 
   AVStream* stream() const { return format_->streams[stream_]; }
   // Every frame a key frame by the codec's nature (ProRes, DNxHD, MJPEG).
-  bool intra_only() const {
-    const AVCodecDescriptor* d = avcodec_descriptor_get(codec_->codec_id);
-    return d != nullptr && (d->props & AV_CODEC_PROP_INTRA_ONLY) != 0;
-  }
+  bool intra_only() const { return IntraOnly(codec_->codec_id); }
   AVFormatContext* format() const { return format_; }
   const AVFrame* frame() const { return frame_; }
 
@@ -361,12 +363,23 @@ std::string DecodeImage(const std::string& path, cv::Mat* bgr,
   return error;
 }
 
-// A name FFmpeg's image reader takes for a JPEG (it goes by the name too).
-bool HasJpegName(const std::string& path) {
+// Whether `path`'s extension, in lower case, is one of `extensions`.
+bool HasExtension(const std::string& path,
+                  std::initializer_list<const char*> extensions) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  return ext == ".jpg" || ext == ".jpeg" || ext == ".jpe" || ext == ".jfif";
+  return std::any_of(extensions.begin(), extensions.end(),
+                     [&](const char* e) { return ext == e; });
+}
+
+// Names FFmpeg's image reader takes for a JPEG or a TIFF (it goes by the
+// name too).
+bool HasJpegName(const std::string& path) {
+  return HasExtension(path, {".jpg", ".jpeg", ".jpe", ".jfif"});
+}
+bool HasTiffName(const std::string& path) {
+  return HasExtension(path, {".tif", ".tiff"});
 }
 
 }  // namespace
