@@ -371,7 +371,8 @@ def _run(argv, interrupt):
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "
               f"(Ctrl-C stops)", flush=True)
         track = estimate_run.run(run.scene, run.camera, clip.filepath, clip.frame_start, numbers,
-                                 options, progress=interrupt.progress)
+                                 options, progress=interrupt.progress,
+                                 frame_cameras=run.frame_cameras)
     except PlaceTimeError as e:
         fail(EXIT_USAGE, str(e))
     except gather.SceneError as e:

@@ -184,7 +184,8 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         RUN.update(running=True, fraction=0.0, cancel=False, thread=None)
         try:
             track = estimate_run.run(run.scene, run.camera, run.clip.filepath,
-                                     run.clip.frame_start, run.frames, run.options)
+                                     run.clip.frame_start, run.frames, run.options,
+                                     frame_cameras=run.frame_cameras)
         except (errors.EstimateError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -205,7 +206,7 @@ class CLIP_OT_sunlapse_estimate(bpy.types.Operator):
         self._worker = background.Worker(
             lambda progress: estimate_run.run(run.scene, run.camera, run.clip.filepath,
                                               run.clip.frame_start, run.frames, run.options,
-                                              progress))
+                                              progress, run.frame_cameras))
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.1, window=context.window)

@@ -390,6 +390,52 @@ def camera_motion(context, obj, frames) -> Optional[str]:
             + (f", its lens by {100 * zoom:.1f}%" if zoom > CAMERA_LENS_SHARE else ""))
 
 
+def _solved_frames(context, obj) -> Optional[set]:
+    """The scene frames the camera's Camera Solver constraint has a
+    reconstructed camera for, or None when nothing says (no constraint, or
+    no solve: camera_solve reports that)."""
+    con = next((c for c in obj.constraints if c.type == "CAMERA_SOLVER"), None)
+    if con is None:
+        return None
+    clip = context.scene.active_clip if con.use_active_clip else con.clip
+    if clip is None or not clip.tracking.reconstruction.is_valid:
+        return None
+    # Tracking counts the clip's own frames from 1 (with its offset).
+    shift = clip.frame_start - 1 - clip.frame_offset
+    return {int(c.frame) + shift for c in clip.tracking.reconstruction.cameras}
+
+
+def camera_path(context, obj, info: CameraInfo, frames: Sequence[int]
+                ) -> Dict[int, Optional[CameraInfo]]:
+    """The camera on each of `frames` (scene frames), evaluated through the
+    depsgraph (keys, constraints, parents, a camera solve; lens, shift and
+    sensor too): `info` with that frame's matrix and lens. None on a frame
+    the camera's solve has no reconstructed camera for (the constraint
+    would hold a guess there). The current frame is put back."""
+    scene = context.scene
+    now = scene.frame_current
+    solved = _solved_frames(context, obj)
+    out: Dict[int, Optional[CameraInfo]] = {}
+    try:
+        for f in frames:
+            if solved is not None and f not in solved:
+                out[f] = None
+                continue
+            scene.frame_set(f)
+            depsgraph = context.evaluated_depsgraph_get()
+            cam = obj.data
+            params = dict(info.params,
+                          matrix_world=np.array(obj.evaluated_get(depsgraph).matrix_world,
+                                                dtype=np.float64),
+                          lens_mm=float(cam.lens), sensor_width_mm=float(cam.sensor_width),
+                          sensor_height_mm=float(cam.sensor_height),
+                          shift_x=float(cam.shift_x), shift_y=float(cam.shift_y))
+            out[f] = CameraInfo(name=info.name, params=params, distortion=info.distortion)
+    finally:
+        scene.frame_set(now)
+    return out
+
+
 def _clip_distortion(movieclip, warnings) -> Optional[dict]:
     """The clip's tracking-camera lens distortion, when the user set one."""
     tc = movieclip.tracking.camera

@@ -25,6 +25,9 @@ class RunJob:
     options: EstimateOptions
     # Recorded in the track's method options (ground, model, times' source).
     record: Dict[str, Any] = field(default_factory=dict)
+    # A moving camera: the native camera on each frame (None: no pose there);
+    # None for a camera that stays put.
+    frame_cameras: Optional[Dict[int, Any]] = None
 
 
 def ground_names(settings, model=None):
@@ -123,12 +126,13 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
                       min(clip.frame_end, settings.frame_end))
     if frames[0] > frames[1]:
         raise gather.SceneError(f"empty frame range {frames[0]}-{frames[1]}")
-    moved = gather.camera_motion(context, settings.camera or context.scene.camera, frames)
-    if moved is not None:
+    camera_obj = settings.camera or context.scene.camera
+    moved = gather.camera_motion(context, camera_obj, frames)
+    if moved is not None and (method or settings.method) != "default":
         raise gather.SceneError(
             f"The camera '{cam.name}' moves over frames {frames[0]}-{frames[1]} ({moved}): "
-            f"sunlapse estimates the Sun for a camera that stays put. Estimate a part of "
-            f"the clip where it does not move (Frame Range, --frames), or key it still")
+            f"the thesis method follows a camera that stays put; use the default method, "
+            f"or a Frame Range where the camera does not move")
     options = EstimateOptions(
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
@@ -170,8 +174,26 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
             print(f"sunlapse: warning: {w}")
         else:
             warnings.append(w)
-    return RunJob(scene, camera, clip, list(range(frames[0], frames[1] + 1)), options,
-                  track_extra)
+    numbers = list(range(frames[0], frames[1] + 1))
+    frame_cameras = None
+    if moved is not None:
+        frame_cameras = moving_camera(context, camera_obj, cam, numbers, track_extra, moved)
+    return RunJob(scene, camera, clip, numbers, options, track_extra, frame_cameras)
+
+
+def moving_camera(context, obj, cam, frames: List[int], record: Dict[str, Any],
+                  moved: str) -> Dict[int, Any]:
+    """The native camera on each frame of a moving camera (None where its
+    solve has no pose); the track records the motion and the frames
+    without a pose."""
+    path = gather.camera_path(context, obj, cam, frames)
+    unposed = [f for f in frames if path[f] is None]
+    if len(unposed) == len(frames):
+        raise gather.SceneError(
+            f"The camera '{cam.name}' has no solved pose on frames {frames[0]}-{frames[-1]}: "
+            f"solve the camera over them (Movie Clip Editor › Solve Camera Motion)")
+    record["moving_camera"] = {"motion": moved, "frames_without_pose": unposed}
+    return {f: None if info is None else gather.build_camera(info) for f, info in path.items()}
 
 
 def view_doubts(model, cam, scene, camera, ground: List[str]) -> List[str]:

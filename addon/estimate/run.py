@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Callable, Optional, Sequence
+from typing import Any, Callable, Dict, Optional, Sequence
 
 from . import frames as clip_frames, native_loader, thesis, whole_clip
 from .errors import EstimateError
@@ -14,11 +14,18 @@ from ..core import clock, trackfile
 
 
 def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[int],
-        options: EstimateOptions, progress: Optional[Callable[[float], bool]] = None
-        ) -> trackfile.Track:
-    """Estimates the Sun on `frames` (consecutive scene frame numbers)."""
+        options: EstimateOptions, progress: Optional[Callable[[float], bool]] = None,
+        frame_cameras: Optional[Dict[int, Any]] = None) -> trackfile.Track:
+    """Estimates the Sun on `frames` (consecutive scene frame numbers).
+    `frame_cameras`: a moving camera's native camera on each frame (None on
+    a frame without a pose), for the default method only; None: `camera`
+    stays put."""
     native_loader.require()
     options.check()
+    moving = frame_cameras is not None
+    if moving and (options.method != "default" or options.initial_sun is not None):
+        raise EstimateError("a moving camera is estimated by the default method alone "
+                            "(without an initial Sun)")
     frames = list(frames)
     times = None
     if options.frame_times is not None:
@@ -63,6 +70,6 @@ def run(scene, camera, clip_path: str, clip_frame_start: int, frames: Sequence[i
     t0 = time.perf_counter()
     if options.method == "default" and options.initial_sun is None:
         return whole_clip.run(scene, camera, clip_path, source, frames, visit, times, options,
-                              track, progress, t0)
+                              track, progress, t0, frame_cameras)
     return thesis.run_tracked(scene, camera, source, frames, visit, times, options, track,
                               progress, t0)

@@ -262,6 +262,16 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
+def reference_camera(frame_cameras: Dict[int, Any], frames: Sequence[int]):
+    """The view a moving camera's frames are seen from: its pose on the
+    posed frame nearest the middle of the run (the views either side differ
+    least from it)."""
+    posed = [f for f in frames if frame_cameras.get(f) is not None]
+    if not posed:
+        raise EstimateError("the camera has no pose on any frame of the run")
+    return frame_cameras[posed[len(posed) // 2]]
+
+
 def working_factor(width: int) -> int:
     """The power of two a frame `width` wide is divided by to be at most
     WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
@@ -442,7 +452,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
              stream: Optional[Callable[..., Iterable[Tuple[int, Gray]]]] = None,
              source: Optional[SourceFn] = None,
              fit_circle: Optional[Callable[..., Any]] = None,
-             clock_elevation_deg: Optional[Sequence[float]] = None
+             clock_elevation_deg: Optional[Sequence[float]] = None,
+             frame_cameras: Optional[Dict[int, Any]] = None
              ) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
@@ -465,10 +476,12 @@ def estimate(native, scene, camera, frames: Sequence[int],
     ephemeris gives for its capture time and place (None when either is
     unknown); a frame whose Sun is below the horizon has no direct
     sunlight, unless the footage contradicts the times
-    (night_by_the_clock)."""
+    (night_by_the_clock). `frame_cameras`: a moving camera, {frame: the
+    native camera on it, of `camera`'s size, or None where it has no pose};
+    every frame is then seen from one of them (motion/view_warp.h)."""
     return _WholeClip(native, scene, camera, frames, read_gray, ground_object_ids, times_s,
                       ignore_top_rows, progress, stream, source, fit_circle,
-                      clock_elevation_deg).run()
+                      clock_elevation_deg, frame_cameras).run()
 
 
 class _WholeClip:
@@ -478,7 +491,7 @@ class _WholeClip:
 
     def __init__(self, native, scene, camera, frames, read_gray, ground_object_ids, times_s,
                  ignore_top_rows, progress, stream, source, fit_circle,
-                 clock_elevation_deg=None):
+                 clock_elevation_deg=None, frame_cameras=None):
         self.native, self.scene, self.camera = native, scene, camera
         self.frames, self.n = list(frames), len(frames)
         self.read_gray, self.stream, self.source = read_gray, stream, source
@@ -498,12 +511,30 @@ class _WholeClip:
         self.frames_read = 0
         self.tracking_s = 0.0
         self.checked = 0
+        # A moving camera's frames are seen from one of its views, the
+        # reference (motion/view_warp.h): the estimate runs on them as on a
+        # fixed camera's.
+        self.moving = frame_cameras is not None
+        if self.moving:
+            camera = reference_camera(frame_cameras, self.frames)
         # Large frames are reduced (WORKING_MAX_WIDTH): `work` is the camera
         # of the frames the evidence and the tracker see.
         factor = working_factor(camera.width)
         self.factor = factor
         self.work = camera if factor == 1 else camera.resized(camera.width // factor,
                                                               camera.height // factor)
+        self.view: Any = None
+        self.frame_work: Dict[int, Any] = {}
+        if self.moving:
+            try:
+                self.view = native.ViewWarp(scene, self.work)
+            except ValueError:
+                raise EstimateError("the camera sees none of the model on the frame its "
+                                    "moving view is taken from (the middle of the run)")
+            self.frame_work = {
+                f: None if c is None else
+                c if factor == 1 else c.resized(self.work.width, self.work.height)
+                for f, c in frame_cameras.items()}
         self.top = -(-ignore_top_rows // factor)
         self.result.tracker_pixel_scale = camera.width / self.work.width
         # Segments the caller knows of: capture times going back.
@@ -578,9 +609,11 @@ class _WholeClip:
         native, frames = self.native, self.frames
         wanted_reference = [frames[i] for i in spread(self.n)]
         size = (self.work.width, self.work.height)
+        # A moving camera's frames are read exactly (a key frame near the
+        # one asked would need its own pose).
         reference_frames: Iterable[Tuple[int, Gray]] = (
-            ((f, self.reduced(self.read_gray(f))) for f in wanted_reference)
-            if self.stream is None else self.stream(wanted_reference, True, size))
+            ((f, self.reduced(self.read_gray(f), f)) for f in wanted_reference)
+            if self.stream is None else self.stream(wanted_reference, not self.moving, size))
         opts = native.SkyEvidenceOptions()
         opts.ignore_top_rows = self.top
         self.sky = native.SkyEvidence(self.scene, self.work, opts)
@@ -591,6 +624,8 @@ class _WholeClip:
         budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES or independent else 0
         wanted = set(frames)
         for f, image in reference_frames:
+            if self.moving and self.stream is not None:
+                image = self.from_reference_view(f, image)
             gray = _frame(image)
             reference.append(gray)
             if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
@@ -616,11 +651,16 @@ class _WholeClip:
                                             ignore_top_rows=self.top)
         rest = [f for f in frames if f not in kept]
         if self.source is None:
-            frame_source = native.FrameList([(i, self.reduced(self.read_gray(f)))
+            frame_source = native.FrameList([(i, self.reduced(self.read_gray(f), f))
                                              for i, f in enumerate(rest)])
             index_of = {f: i for i, f in enumerate(rest)}
         else:
             frame_source, index_of = self.source(rest, (self.work.width, self.work.height))
+            if self.moving:
+                by_index: List[Any] = [None] * (max(index_of.values(), default=-1) + 1)
+                for f, i in index_of.items():
+                    by_index[i] = self.frame_work.get(f)
+                frame_source = native.WarpedSource(frame_source, self.view, by_index)
         progress = self.progress
         self.done = native.run_clip_pass(
             frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
@@ -945,14 +985,30 @@ class _WholeClip:
         if gray is not None:
             return gray
         self.frames_read += 1
-        return _frame(self.reduced(self.read_gray(self.frames[k])))
+        f = self.frames[k]
+        return _frame(self.reduced(self.read_gray(f), f))
 
-    def reduced(self, image: Gray) -> Gray:
-        """A frame read by read_gray at the working size."""
+    def reduced(self, image: Gray, f: int) -> Gray:
+        """Frame f as read by read_gray, at the working size (and seen from
+        the reference view when the camera moves)."""
         gray = _frame(image)
-        if gray is None or gray.shape == (self.work.height, self.work.width):
+        if gray is None:
             return image
-        return self.native.resized_gray(gray, self.work.width, self.work.height)
+        if gray.shape != (self.work.height, self.work.width):
+            gray = self.native.resized_gray(gray, self.work.width, self.work.height)
+        return self.from_reference_view(f, gray) if self.moving else gray
+
+    def from_reference_view(self, f: int, image: Gray) -> Gray:
+        """A moving camera's frame f (at the working size) resampled into the
+        reference view, or why it cannot be."""
+        gray = _frame(image)
+        if gray is None:
+            return image
+        camera = self.frame_work.get(f)
+        if camera is None:
+            return "the camera has no pose on this frame (not solved)"
+        warped, _, why, _ = self.view.warp(gray, camera)
+        return warped if warped is not None else why
 
     def motion_deg(self, k: int, j: int) -> float:
         return motion.sun_motion_bound_deg(k, j, self.times_s, self.path_options)
@@ -1090,7 +1146,8 @@ class _Streamed:
 
 
 def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Sequence[int],
-        times, options, track: trackfile.Track, progress, t0: float) -> trackfile.Track:
+        times, options, track: trackfile.Track, progress, t0: float,
+        frame_cameras: Optional[Dict[int, Any]] = None) -> trackfile.Track:
     """The default method: the Sun over the whole clip at once (estimate),
     the unmodelled-shadow note on its best-supported frame, then smoothing
     per segment (finish.py)."""
@@ -1111,7 +1168,7 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
         ignore_top_rows=options.ignore_top_rows,
         progress=None if progress is None else (lambda x: progress(0.95 * x)),
         stream=reads.stream, source=reads.frame_source, fit_circle=trimmed_circle.fit_trimmed,
-        clock_elevation_deg=elevation)
+        clock_elevation_deg=elevation, frame_cameras=frame_cameras)
     if result.clock_contradicted:
         shown = ", ".join(map(str, sorted(result.clock_contradicted)[:5]))
         n = len(result.clock_contradicted)

@@ -11,6 +11,7 @@ void BindCalibration(py::module_& m);
 void BindSky(py::module_& m);
 void BindWholeClip(py::module_& m);
 void BindVideo(py::module_& m);
+void BindMotion(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -24,4 +25,5 @@ PYBIND11_MODULE(_native, m) {
   sunlapse::python::BindSky(m);
   sunlapse::python::BindWholeClip(m);
   sunlapse::python::BindVideo(m);
+  sunlapse::python::BindMotion(m);
 }

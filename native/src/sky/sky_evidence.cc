@@ -7,6 +7,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <tuple>
@@ -405,6 +406,19 @@ void CheckFrame(const cv::Mat& f, const Camera& camera) {
               std::to_string(camera.height()) + ")");
 }
 
+// The samples a frame sees (not NaN).
+std::vector<float> Seen(const std::vector<float>& v) {
+  std::vector<float> out;
+  out.reserve(v.size());
+  for (float x : v)
+    if (!std::isnan(x)) out.push_back(x);
+  return out;
+}
+
+// A frame that sees less than this share of the samples (a moving camera's,
+// motion/view_warp.h) has the model out of view.
+constexpr double kMinSeenShare = 0.1;
+
 }  // namespace
 
 int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
@@ -418,18 +432,26 @@ int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
     CheckFrame(f, m.camera);
     m.Sample(f, &v);
     // A frame's exposure is taken out before the quantile: the reference is
-    // a level relative to the frame's median.
-    std::vector<float> sorted = v;
-    std::nth_element(sorted.begin(), sorted.begin() + S / 2, sorted.end());
-    const float med = sorted[S / 2];
+    // a level relative to the frame's median. NaN: a sample a moving
+    // camera's frame does not see (motion/view_warp.h).
+    std::vector<float> sorted = Seen(v);
+    if (sorted.empty()) continue;
+    const size_t half = sorted.size() / 2;
+    std::nth_element(sorted.begin(), sorted.begin() + half, sorted.end());
+    const float med = sorted[half];
     if (!(med > 1e-4f)) continue;  // black frame
-    for (int s = 0; s < S; ++s) per_sample[s].push_back(v[s] / med);
+    for (int s = 0; s < S; ++s)
+      if (!std::isnan(v[s])) per_sample[s].push_back(v[s] / med);
     ++used;
   }
   if (used == 0) return 0;
   m.reference.assign(S, 0.f);
   for (int s = 0; s < S; ++s) {
     auto& x = per_sample[s];
+    if (x.empty()) {  // never seen by the reference frames: left out
+      m.reference[s] = std::numeric_limits<float>::quiet_NaN();
+      continue;
+    }
     const size_t k = std::min(
         x.size() - 1, static_cast<size_t>(m.o.reference_quantile * x.size()));
     std::nth_element(x.begin(), x.begin() + k, x.end());
@@ -488,12 +510,26 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   Require(!m.reference.empty(), "AddFrame() before SetReference()");
   std::vector<float> v;
   m.Sample(frame, &v);
-  std::vector<float> sorted = v;
-  std::nth_element(sorted.begin(), sorted.begin() + S / 2, sorted.end());
-  const float med = sorted[S / 2];
+  // A sample is unseen where a moving camera's frame does not see it, or no
+  // reference frame did (NaN, motion/view_warp.h).
+  int unseen = 0;
+  for (int s = 0; s < S; ++s) {
+    if (std::isnan(m.reference[s]))
+      v[s] = std::numeric_limits<float>::quiet_NaN();
+    unseen += std::isnan(v[s]);
+  }
+  if (S - unseen < std::max(1.0, kMinSeenShare * S)) {
+    out.status = FrameEvidence::Status::kUnusable;
+    out.message = "the model is out of view";
+    return keep();
+  }
+  std::vector<float> sorted = Seen(v);
+  const int seen = static_cast<int>(sorted.size());
+  std::nth_element(sorted.begin(), sorted.begin() + seen / 2, sorted.end());
+  const float med = sorted[seen / 2];
   int saturated = 0;
   for (float x : v) saturated += x >= 0.98f;
-  if (!(med > 2e-3f) || saturated > 0.9 * S) {
+  if (!(med > 2e-3f) || saturated > 0.9 * seen) {
     out.status = FrameEvidence::Status::kUnusable;
     out.message = med > 2e-3f ? "overexposed" : "black (nothing visible)";
     return keep();
@@ -502,6 +538,22 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   std::vector<double> r(S);
   for (int s = 0; s < S; ++s) {
     r[s] = std::clamp(double(v[s]) / med / m.reference[s], 0.0, m.o.max_ratio);
+  }
+  if (unseen > 0) {
+    // An unseen sample takes its group's mean: it adds no contrast across a
+    // boundary and no variance to explain, so only the seen ones count.
+    std::vector<double> n(G, 0), sum(G, 0);
+    double n_all = 0, sum_all = 0;
+    for (int s = 0; s < S; ++s) {
+      if (std::isnan(v[s])) continue;
+      n[m.group[s]] += 1, sum[m.group[s]] += r[s];
+      n_all += 1, sum_all += r[s];
+    }
+    for (int s = 0; s < S; ++s) {
+      if (!std::isnan(v[s])) continue;
+      const int g = m.group[s];
+      r[s] = n[g] > 0 ? sum[g] / n[g] : sum_all / n_all;
+    }
   }
   out.exposure = med;
   // Per group: totals, for the variance every direction tries to explain.
@@ -527,7 +579,9 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   std::vector<double> diffs;
   diffs.reserve(S);
   for (int i = 0; i < S; ++i) {
-    if (m.right[i] >= 0) diffs.push_back(std::abs(r[i] - r[m.right[i]]));
+    const int j = m.right[i];
+    if (j >= 0 && !std::isnan(v[i]) && !std::isnan(v[j]))
+      diffs.push_back(std::abs(r[i] - r[j]));
   }
   double noise = 1e-6;
   if (!diffs.empty()) {

@@ -27,6 +27,9 @@ constexpr double kShrink = 0.4;
 // How far (in first search steps) a frame's search may walk from the
 // predicted Sun before the frame counts as lost.
 constexpr double kMaxWalkSteps = 10;
+// A moving camera's frame that sees less than this share of the ground (or
+// of the band) it is asked about is out of view for the tracker.
+constexpr double kMinSeenShare = 0.25;
 
 }  // namespace
 
@@ -93,6 +96,7 @@ struct ShadowTracker::Impl {
   // Work buffers: band_origin per sub-pixel ray (subsamples^2 per pixel),
   // band_normal/band_x/band_y per band pixel.
   std::vector<float> band_origin, band_x, band_y;
+  size_t band_picked = 0;  // band pixels LoadBand looked at (seen or not)
   std::vector<Eigen::Vector3f> band_normal;
   std::vector<uint8_t> occluded;
   std::vector<float> lit_origin;  // LitOf's scratch
@@ -369,6 +373,7 @@ struct ShadowTracker::Impl {
     for (int i = band_core; i < n; i += outer_stride) picked.push_back(band[i]);
     // In memory order: the band's pixels are scattered over the frame.
     std::sort(picked.begin(), picked.end());
+    band_picked = picked.size();
     // subsamples^2 rays over each pixel's footprint: the lit fraction places
     // an edge within the pixel.
     const int k = o.subsamples;
@@ -383,6 +388,10 @@ struct ShadowTracker::Impl {
       if (i + 8 < m)
         __builtin_prefetch(&frame.at<float>(ground[picked[i + 8]].px));
       const GroundPixel& gp = ground[picked[i]];
+      const float v = frame.at<float>(gp.px);
+      // NaN: a moving camera's frame does not see this point
+      // (motion/view_warp.h).
+      if (std::isnan(v)) continue;
       if (k == 1) {
         band_origin.insert(band_origin.end(),
                            {gp.origin.x(), gp.origin.y(), gp.origin.z()});
@@ -399,7 +408,6 @@ struct ShadowTracker::Impl {
         }
       }
       band_normal.push_back(gp.normal);
-      const float v = frame.at<float>(gp.px);
       band_y.push_back(o.normalize_albedo ? v / gp.albedo : v);
     }
     band_x.resize(band_y.size());
@@ -624,14 +632,26 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
     x[i] = s.Shading(all[i], df, !lit[i]);
     y[i] = frame.at<float>(s.ground[all[i]].px);
   }
-  std::vector<float> sorted = y;
+  // Ground a moving camera's frame does not see is NaN (view_warp.h): left
+  // out of the fit, its albedo left at 1.
+  std::vector<float> seen_x, seen_y;
+  for (size_t i = 0; i < all.size(); ++i) {
+    if (std::isnan(y[i])) continue;
+    seen_x.push_back(x[i]);
+    seen_y.push_back(y[i]);
+  }
+  if (seen_y.empty() || seen_y.size() < all.size() * kMinSeenShare) {
+    out.reason = "the ground is out of view on this frame";
+    return out;
+  }
+  std::vector<float> sorted = seen_y;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
                    sorted.end());
   const double scale =
       std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
   AffineFit fit;
-  RobustAffineFit(static_cast<int>(all.size()), x.data(), y.data(), nullptr, 1,
-                  scale, 4, &fit);
+  RobustAffineFit(static_cast<int>(seen_y.size()), seen_x.data(), seen_y.data(),
+                  nullptr, 1, scale, 4, &fit);
   std::vector<int> shadowed;
   s.band = s.BandAround(all, df, false, &shadowed, &lit);
   s.FindEdgeCasters(shadowed, d);
@@ -641,7 +661,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
     near_edge(s.ground[g].px) = 1;  // unreliable: lit state uncertain
   for (size_t i = 0; i < all.size(); ++i) {
     const double model = fit.a[0] + fit.b[0] * x[i];
-    if (model > 1e-4 && !near_edge(s.ground[all[i]].px)) {
+    if (model > 1e-4 && !std::isnan(y[i]) && !near_edge(s.ground[all[i]].px)) {
       s.ground[all[i]].albedo =
           std::clamp(static_cast<float>(y[i] / model), 0.05f, 20.f);
     }
@@ -736,6 +756,12 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   s.FindEdgeCasters(shadowed, pred);
   s.band = band;
   s.LoadBand(frame);
+  // A moving camera's frame may not see the band (view_warp.h).
+  if (s.band_y.empty() || s.band_y.size() < s.band_picked * kMinSeenShare) {
+    ++s.lost;
+    out.reason = "the shadows' band is out of view on this frame";
+    return finish(pred);
+  }
   std::vector<float> sorted = s.band_y;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
                    sorted.end());

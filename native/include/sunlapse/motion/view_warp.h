@@ -1,0 +1,99 @@
+// A moving camera's frames seen from one fixed view (issue 26).
+//
+// Everything the estimate measures lives on the model's surfaces: the sky
+// table's samples, the tracker's ground, the reference levels. With a fixed
+// camera each surface point stays on one pixel. With a camera that moves
+// (a slider, a pan head, a solved motion-control shot) the point moves in
+// the image, but the model says where: the reference view's pixel p sees
+// the surface point X(p), and frame k shows X(p) at its camera's projection
+// of X(p), when nothing in the model hides it from that camera. So each
+// frame is resampled into the reference view, and the estimate runs on the
+// resampled frames as on a fixed camera's. Points the frame does not see
+// (outside its image, hidden behind another part of the model) come out NaN:
+// the evidence and the tracker leave them out on that frame.
+//
+// Resampling is bilinear: at a working size of at most 1280 pixels, a
+// shadow edge blurs by under half a pixel, less than the reduction already
+// does.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "sunlapse/scene/camera.h"
+#include "sunlapse/scene/scene.h"
+#include "sunlapse/video/frame_stream.h"
+
+namespace sunlapse {
+
+struct ViewWarpOptions {
+  // A frame is used when it sees at least this share of the model surface
+  // the reference view sees; below, it is reported out of view.
+  double min_seen_share = 0.2;
+  // A surface point is hidden from a frame's camera when the camera's ray
+  // toward it first hits the model this much nearer than the point (share
+  // of the distance; a grazing wall's depth varies within a pixel).
+  double hidden_share = 0.01;
+  void Check() const;
+};
+
+struct ViewWarpResult {
+  enum class Status {
+    kOk,         // the frame was resampled into the reference view
+    kOutOfView,  // the frame sees too little of the model (message says)
+    kNoFrame,    // no frame was given (not decodable)
+  };
+  Status status = Status::kNoFrame;
+  std::string message;
+  // Share of the reference view's model pixels the frame sees.
+  double seen_share = 0.0;
+};
+
+class ViewWarp {
+ public:
+  // The scene must outlive this. Casts one ray per pixel of the reference
+  // camera. Throws std::invalid_argument on bad options or when the
+  // reference camera sees no model surface.
+  ViewWarp(const Scene& scene, const Camera& reference,
+           const ViewWarpOptions& options = {});
+  ~ViewWarp();
+  ViewWarp(const ViewWarp&) = delete;
+  ViewWarp& operator=(const ViewWarp&) = delete;
+
+  const Camera& reference() const;
+  // Pixels of the reference view that see the model.
+  int model_pixels() const;
+
+  // Frame (CV_32F gray of `camera`'s size, or empty) taken by `camera` ->
+  // *out, CV_32F of the reference camera's size, NaN where the frame does
+  // not see the reference pixel's surface point (and where the reference
+  // view sees no model). Thread-safe.
+  ViewWarpResult Warp(const cv::Mat& frame, const Camera& camera,
+                      cv::Mat* out) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// A FrameSource whose frames come resampled into a ViewWarp's reference
+// view: the frame with index i from `inner` was taken by cameras[i]. A
+// frame without a camera (the solve has no pose there) or out of view comes
+// out unusable with the reason. Both must outlive this.
+class WarpedSource : public FrameSource {
+ public:
+  WarpedSource(FrameSource* inner, const ViewWarp* warp,
+               std::vector<std::optional<Camera>> cameras_by_index);
+  bool Next(StreamedFrame* frame) override;
+
+ private:
+  FrameSource* inner_;
+  const ViewWarp* warp_;
+  std::vector<std::optional<Camera>> cameras_;
+};
+
+}  // namespace sunlapse

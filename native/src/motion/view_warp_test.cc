@@ -1,0 +1,151 @@
+#include "sunlapse/motion/view_warp.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "../testing/synthetic.h"
+
+namespace sunlapse {
+namespace {
+
+using testing::LookAt;
+using testing::RenderLambertian;
+using testing::RenderOptions;
+
+constexpr int kW = 320, kH = 180;
+
+// Ground dark, everything standing on it bright, no Sun and no noise: a
+// frame's value at a pixel says which object it shows.
+RenderOptions Flat() {
+  RenderOptions o;
+  o.ambient = 1.0;
+  o.sun = 0.0;
+  o.noise = 0.0;
+  o.albedo = [](int id, const Eigen::Vector3f&) { return id == 0 ? 0.2 : 0.9; };
+  return o;
+}
+
+const Eigen::Vector3d kDown(0, 0, 1);  // "Sun" unused (sun = 0)
+
+TEST(ViewWarp, TheSameCameraGivesTheFrameBackWhereTheModelIsSeen) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera cam = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  RenderOptions o = testing::TexturedGround(3);
+  const cv::Mat frame = RenderLambertian(scene, cam, {0.3, -0.4, 0.8}, o);
+  const ViewWarp warp(scene, cam);
+  cv::Mat out;
+  const ViewWarpResult r = warp.Warp(frame, cam, &out);
+  ASSERT_EQ(r.status, ViewWarpResult::Status::kOk) << r.message;
+  EXPECT_GT(r.seen_share, 0.99);
+  double worst = 0;
+  int finite = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float v = out.at<float>(y, x);
+      if (std::isnan(v)) continue;
+      ++finite;
+      worst = std::max(worst, double(std::abs(v - frame.at<float>(y, x))));
+    }
+  EXPECT_GT(finite, warp.model_pixels() * 0.98);
+  EXPECT_LT(worst, 1e-3);
+}
+
+TEST(ViewWarp,
+     AMovedCameraIsResampledIntoTheReferenceViewAndHiddenPointsAreLeftOut) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  // A slide of 4 m to the side and a pan: the box hides other ground.
+  const Camera moved = LookAt({-1, -11, 6}, {-1, 1, 0}, kW, kH);
+  const cv::Mat frame = RenderLambertian(scene, moved, kDown, Flat());
+  const ViewWarp warp(scene, reference);
+  cv::Mat out;
+  const ViewWarpResult r = warp.Warp(frame, moved, &out);
+  ASSERT_EQ(r.status, ViewWarpResult::Status::kOk) << r.message;
+  EXPECT_GT(r.seen_share, 0.3);
+  EXPECT_LT(r.seen_share, 0.99);
+  // What the reference view sees where: ground (0) or not.
+  std::vector<Eigen::Vector2d> pixels;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) pixels.emplace_back(x, y);
+  const Hits hits = scene.IntersectPixels(reference, pixels);
+  int ground_seen = 0, wrong = 0, hidden_ground = 0;
+  for (int i = 0; i < kW * kH; ++i) {
+    const float v = out.at<float>(i / kW, i % kW);
+    if (!hits.hit(i)) {
+      EXPECT_TRUE(std::isnan(v)) << "no model at pixel " << i;
+      continue;
+    }
+    if (hits.object_id[i] != 0) continue;
+    if (std::isnan(v)) {
+      ++hidden_ground;
+      continue;
+    }
+    ++ground_seen;
+    // Bilinear mixes a pixel at an object's outline: only clear misses count
+    // (a ground point showing the box in front of it).
+    wrong += v > 0.5f;
+  }
+  EXPECT_GT(ground_seen, 5000);
+  EXPECT_GT(hidden_ground, 50);  // the box and the pole hide some ground
+  EXPECT_LT(wrong, ground_seen / 200) << wrong << " of " << ground_seen;
+}
+
+TEST(ViewWarp, ACameraLookingAwayIsOutOfView) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  const Camera away = LookAt({3, -11, 8}, {3, -30, 12}, kW, kH);
+  const cv::Mat frame(kH, kW, CV_32FC1, cv::Scalar(0.5f));
+  const ViewWarp warp(scene, reference);
+  cv::Mat out;
+  const ViewWarpResult r = warp.Warp(frame, away, &out);
+  EXPECT_EQ(r.status, ViewWarpResult::Status::kOutOfView);
+  EXPECT_NE(r.message.find("% of the model"), std::string::npos) << r.message;
+  EXPECT_LT(r.seen_share, 0.2);
+}
+
+TEST(ViewWarp, RefusesAFrameOfAnotherSizeAndACameraThatSeesNothing) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  const ViewWarp warp(scene, reference);
+  cv::Mat out;
+  EXPECT_THROW(
+      warp.Warp(cv::Mat(10, 10, CV_32FC1, cv::Scalar(0.f)), reference, &out),
+      std::invalid_argument);
+  EXPECT_EQ(warp.Warp(cv::Mat(), reference, &out).status,
+            ViewWarpResult::Status::kNoFrame);
+  EXPECT_THROW(ViewWarp(scene, LookAt({0, 0, 30}, {0, 0, 60}, kW, kH)),
+               std::invalid_argument);
+}
+
+TEST(WarpedSource, FramesWithoutAPoseOrOutOfViewComeOutUnusableWithTheReason) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  const Camera away = LookAt({3, -11, 8}, {3, -30, 12}, kW, kH);
+  std::vector<StreamedFrame> frames(3);
+  for (int i = 0; i < 3; ++i) {
+    frames[i].index = i;
+    frames[i].status = StreamedFrame::Status::kOk;
+    frames[i].gray = RenderLambertian(scene, reference, kDown, Flat());
+    frames[i].luma = cv::Mat(kH, kW, CV_8UC1, cv::Scalar(1));
+  }
+  FrameList list(std::move(frames));
+  const ViewWarp warp(scene, reference);
+  WarpedSource source(&list, &warp, {reference, std::nullopt, away});
+  StreamedFrame f;
+  ASSERT_TRUE(source.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kOk);
+  EXPECT_TRUE(f.luma.empty());  // the unwarped 8-bit frame is not handed on
+  EXPECT_EQ(f.gray.cols, kW);
+  ASSERT_TRUE(source.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kUnusable);
+  EXPECT_NE(f.message.find("no pose"), std::string::npos);
+  ASSERT_TRUE(source.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kUnusable);
+  EXPECT_NE(f.message.find("of the model"), std::string::npos);
+  EXPECT_FALSE(source.Next(&f));
+}
+
+}  // namespace
+}  // namespace sunlapse
