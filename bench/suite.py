@@ -1,7 +1,8 @@
 """The randomised scene suite: render (once), estimate as users do, score.
 
   python3 bench/suite.py [--scenes N] [--twilight N] [--rough N] [--overcast N]
-                         [--urban N] [--walls N] [--multiday N] [--trees N] [--true-model]
+                         [--urban N] [--walls N] [--multiday N] [--trees N] [--moving N]
+                         [--true-model]
                          [--no-times] [--seeds 1,2,5-9,rough1-6] [--jobs J]
                          [--estimator-only] [--smoothings two_pass,physical]
                          [--method default] [--cache DIR] [--out FIGURES.json]
@@ -35,6 +36,10 @@ footage brings (examples/random_scene.py PREFIXES):
                 (--times, from the truth's local times) unless --no-times
   --trees N     trees1 ...: 1-3 trees not in the model whose leafy crowns
                 cast dappled shadows on the ground
+  --moving N    moving1 ...: a motion-control shot: the camera slides 0.3-2 m,
+                pans 5-30 deg and on half of them tilts 1-4 deg, eased; the
+                scene.blend carries it keyed on every frame with a solve's
+                jitter (3 mm, 0.02 deg); casters may leave the view at the ends
 Each is rendered by
 examples/generate_scene.py --random KEY at 320x180, 32 frames, into
 CACHE/<key>/ (default build/suite-cache/, outside git), and re-rendered only
@@ -94,7 +99,8 @@ TWILIGHT_SCENES = 8
 # The kinds added for issue 25 item 7, off by default (flag -> prefix).
 KINDS = {"rough": random_scene.ROUGH_PREFIX, "overcast": random_scene.OVERCAST_PREFIX,
          "urban": random_scene.URBAN_PREFIX, "multiday": random_scene.MULTIDAY_PREFIX,
-         "trees": random_scene.TREES_PREFIX, "walls": random_scene.WALLS_PREFIX}
+         "trees": random_scene.TREES_PREFIX, "walls": random_scene.WALLS_PREFIX,
+         "moving": random_scene.MOVING_PREFIX}
 # A rough member's twin scored on the true model: "<key>/true".
 TRUE_SUFFIX = "/true"
 
@@ -429,6 +435,9 @@ def main(argv=None):
     p.add_argument("--trees", type=int, default=0,
                    help="tree members trees1, 2, ... (default 0): footage-only trees casting "
                         "dappled shadows")
+    p.add_argument("--moving", type=int, default=0,
+                   help="moving-camera members moving1, 2, ... (default 0): a slide of "
+                        "0.3-2 m and a pan of 5-30 deg, keyed per frame with a solve's jitter")
     p.add_argument("--no-times", action="store_true",
                    help="do not give the multi-day members their capture times")
     p.add_argument("--seeds", type=parse_seeds,

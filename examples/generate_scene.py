@@ -50,7 +50,7 @@ import subprocess
 import sys
 
 import bpy
-from mathutils import Quaternion, Vector
+from mathutils import Euler, Quaternion, Vector
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -812,6 +812,8 @@ def main_random(args, native):
     configure_render(scene, spec["render"]["samples"], exposure, frames, frames_dir)
     scene.cycles.seed = spec["render"].get("seed", 0)
     deg = spec["degradations"]
+    if "camera_motion" in spec:
+        key_camera_move(spec, cam_obj, rest, frames)
     if deg["shake_deg"]:
         cam_obj["rest_rotation_euler"] = list(rest)
         for i, off in enumerate(random_scene.shake_offsets_deg(spec)):
@@ -857,6 +859,8 @@ def main_random(args, native):
                "random_scene": spec})
     trackfile.write_track(os.path.join(out, "truth.sun.json"), truth)
 
+    if "camera_motion" in spec:  # the user has the camera as a solve gives it
+        key_camera_move(spec, cam_obj, rest, frames, jitter=True)
     if "rough_model" in spec:
         save_user_blend(scene, out, clip_path, lamp, extras, "scene_true.blend")
         roughen(spec, scene, model, mats)
@@ -864,6 +868,29 @@ def main_random(args, native):
     else:
         save_user_blend(scene, out, clip_path, lamp, extras)
     print(f"generate_scene: random {spec['key']}: {frames} frames {width}x{height} -> {out}")
+
+
+def key_camera_move(spec, cam_obj, rest, frames, jitter=False):
+    """Keys a moving member's camera on every frame (random_scene.camera_move
+    about the rest pose), with a camera solve's error when `jitter`."""
+    # The rest location is kept from the first call: by the second the
+    # location is a key's.
+    if "rest_location" not in cam_obj:
+        cam_obj["rest_location"] = list(cam_obj.location)
+    location, rest_q = Vector(cam_obj["rest_location"]), rest.to_quaternion()
+    for i in range(frames):
+        offset, pan, tilt = random_scene.camera_move(spec, i)
+        q = (Quaternion((0.0, 0.0, 1.0), math.radians(pan)) @ rest_q
+             @ Quaternion((1.0, 0.0, 0.0), math.radians(tilt)))
+        at = location + Vector(offset)
+        if jitter:
+            d_loc, d_rot = random_scene.solve_jitter(spec, i)
+            at += Vector(d_loc)
+            q = Euler([math.radians(v) for v in d_rot]).to_quaternion() @ q
+        cam_obj.location = at
+        cam_obj.rotation_euler = q.to_euler("XYZ", rest)
+        cam_obj.keyframe_insert("location", frame=i + 1)
+        cam_obj.keyframe_insert("rotation_euler", frame=i + 1)
 
 
 def render_masks(scene, ground, suns, north, mask_frames, masks_dir, strength_factors=None):
@@ -949,8 +976,9 @@ def save_user_blend(scene, out, clip_path, lamp, extras, name="scene.blend"):
     """Strips the render scene down to what a user would have."""
     bpy.data.objects.remove(lamp)
     # Shake and exposure drift belong to the footage, not to the matched
-    # camera: the user has the camera at rest and a fixed exposure.
-    if scene.camera.animation_data:
+    # camera: the user has the camera at rest and a fixed exposure. A moving
+    # camera keeps its keys (a solve's, key_camera_move).
+    if scene.camera.animation_data and "rest_location" not in scene.camera:
         scene.camera.animation_data_clear()
         rest = scene.camera.get("rest_rotation_euler")
         if rest is not None:

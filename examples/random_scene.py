@@ -4,7 +4,7 @@ bpy-free: the spec is a plain JSON-able dict that examples/generate_scene.py
 (`--random KEY`) turns into a render, and that bench/suite.py hashes into its
 cache key. KEY is an integer seed, the name of a fixed member (FIXED), or
 <prefix><seed> for a kind of member (PREFIXES: twilight, rough models,
-overcast runs, urban scenes, multi-day clips, trees), each drawn from its own
+overcast runs, urban scenes, multi-day clips, trees, moving cameras), each drawn from its own
 random stream so that no kind changes another's scenes.
 
 The Sun comes from a `sun_position(y, m, d, h, mi, s, lat, lon) -> (zenith,
@@ -87,10 +87,24 @@ MULTIDAY_MAX_GAIN_EV = 3.0
 # Keys "trees<seed>": footage-only trees over the ground (not in the model)
 # whose leafy crowns cast dappled shadows.
 TREES_PREFIX = "trees"
+# Keys "moving<seed>": an outdoor scene shot by a motion-control rig: the
+# camera slides MOVING_SLIDE_M along a rail (within MOVING_RAIL_TURN_DEG of
+# its image's horizontal), pans MOVING_PAN_DEG and, on half the members,
+# tilts up to MOVING_TILT_DEG, eased in and out, centred on the drawn view
+# (the middle frame). The user's scene.blend carries the camera keyed on
+# every frame as Blender's solver delivers it: the true motion plus a
+# solve's jitter (MOVING_JITTER_M, MOVING_JITTER_DEG, standard deviations).
+MOVING_PREFIX = "moving"
+MOVING_SLIDE_M = (0.3, 2.0)
+MOVING_RAIL_TURN_DEG = 30.0
+MOVING_PAN_DEG = (5.0, 30.0)
+MOVING_TILT_DEG = 4.0
+MOVING_JITTER_M = 0.003
+MOVING_JITTER_DEG = 0.02
 # Every prefix of a member kind; a key is <prefix><seed> (seeds plain: the
 # static members).
 PREFIXES = (TWILIGHT_PREFIX, ROUGH_PREFIX, OVERCAST_PREFIX, URBAN_PREFIX, MULTIDAY_PREFIX,
-            TREES_PREFIX, WALLS_PREFIX)
+            TREES_PREFIX, WALLS_PREFIX, MOVING_PREFIX)
 
 GROUNDS = ["paving", "asphalt", "grass", "wood", "cobbles"]
 CASTER_SHAPES = ["pole", "box", "wall", "kiosk", "lshape", "cylinder"]
@@ -1035,6 +1049,43 @@ def exposure_offset(spec, frame_index):
     return d["amplitude_ev"] * math.sin(2 * math.pi * frame_index / d["period_frames"] + d["phase"])
 
 
+def _draw_motion(rng, spec):
+    """A motion-control move through the drawn view (keys "moving<seed>")."""
+    right = camera_of(spec).right
+    turn = math.radians(rng.uniform(-MOVING_RAIL_TURN_DEG, MOVING_RAIL_TURN_DEG))
+    rail = _unit([right[0] * math.cos(turn) - right[1] * math.sin(turn),
+                  right[0] * math.sin(turn) + right[1] * math.cos(turn), 0.0])
+    tilt = rng.choice((-1.0, 1.0)) * rng.uniform(1.0, MOVING_TILT_DEG) \
+        if rng.random() < 0.5 else 0.0
+    return {"slide_m": round(rng.uniform(*MOVING_SLIDE_M), 3),
+            "rail": [round(v, 5) for v in rail],
+            "pan_deg": round(rng.choice((-1.0, 1.0)) * rng.uniform(*MOVING_PAN_DEG), 2),
+            "tilt_deg": round(tilt, 2)}
+
+
+def camera_move(spec, frame_index):
+    """Where a moving member's camera is on frame `frame_index` (0-based)
+    against the drawn view: (location offset [x, y, z] m, pan about the
+    world's Z deg, tilt about the camera's own x axis deg). Eased
+    (smoothstep), zero on the middle frame; None for a still camera."""
+    m = spec.get("camera_motion")
+    if m is None:
+        return None
+    n = spec["render"]["frames"]
+    t = frame_index / max(1, n - 1)
+    s = t * t * (3.0 - 2.0 * t) - 0.5
+    return ([m["slide_m"] * s * v for v in m["rail"]], m["pan_deg"] * s, m["tilt_deg"] * s)
+
+
+def solve_jitter(spec, frame_index):
+    """A camera solve's error on frame `frame_index`: (location offset
+    [x, y, z] m, rotation offsets about x, y, z deg), drawn per member and
+    frame."""
+    rng = random.Random(f"solve-{spec['key']}-{frame_index}")
+    return ([rng.gauss(0.0, MOVING_JITTER_M) for _ in range(3)],
+            [rng.gauss(0.0, MOVING_JITTER_DEG) for _ in range(3)])
+
+
 def shake_offsets_deg(spec):
     """Per frame (x, y, z) rotation offsets of the camera, degrees."""
     s = spec["degradations"]["shake_deg"]
@@ -1145,6 +1196,9 @@ def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION
             spec["overcast"] = _draw_overcast(rng, frames)
             # The run is the cloud and the ramp the exposure's change.
             spec["degradations"].update(clouds=[], exposure_drift=None)
+        elif prefix == MOVING_PREFIX:
+            spec["camera_motion"] = _draw_motion(rng, spec)
+            spec["degradations"]["shake_deg"] = 0.0  # the solve's jitter instead
     spec["generator_version"] = GENERATOR_VERSION
     return spec
 
@@ -1167,6 +1221,10 @@ def describe(spec):
         flags.insert(0, f"overcast {o['first']}-{o['last']}")
     if "multiday" in spec:
         flags.insert(0, f"{spec['multiday']['days']} days")
+    if "camera_motion" in spec:
+        m = spec["camera_motion"]
+        flags.insert(0, f"slide {m['slide_m']:.1f}m pan {m['pan_deg']:+.0f} "
+                        f"tilt {m['tilt_deg']:+.0f}")
     if spec.get("trees"):
         flags.insert(0, f"{len(spec['trees'])} trees")
     return (f"{spec['kind']} lat {p['latitude_deg']:.1f} lon {p['longitude_deg']:.1f} "

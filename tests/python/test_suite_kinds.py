@@ -159,3 +159,26 @@ def test_wall_scenes_put_the_shadows_on_walls(key):
     assert view["wall"] >= 0.45 and view["ground"] >= 0.08
     for f in view["frames"]:
         assert f["wall_shadow"] >= max(0.06, f["ground_shadow"]) and f["wall_lit"] >= 0.06
+
+
+@pytest.mark.parametrize("key", ["moving1", "moving2", "moving3", "moving4"])
+def test_moving_members_slide_and_pan_through_the_drawn_view(key):
+    spec = random_scene.draw(key, SP)
+    m = spec["camera_motion"]
+    assert 0.3 <= m["slide_m"] <= 2.0 and 5.0 <= abs(m["pan_deg"]) <= 30.0
+    assert abs(m["tilt_deg"]) <= random_scene.MOVING_TILT_DEG
+    assert abs(math.hypot(*m["rail"][:2]) - 1.0) < 1e-3 and m["rail"][2] == 0.0
+    assert spec["degradations"]["shake_deg"] == 0.0  # the solve's jitter instead
+    n = spec["render"]["frames"]
+    first, last = random_scene.camera_move(spec, 0), random_scene.camera_move(spec, n - 1)
+    # Centred on the drawn view and eased: the ends are half the move either
+    # side, and the first step is a small share of the mean step.
+    assert math.isclose(first[1], -m["pan_deg"] / 2) and math.isclose(last[1], m["pan_deg"] / 2)
+    assert math.isclose(math.dist(first[0], last[0]), m["slide_m"], rel_tol=1e-4)
+    step = random_scene.camera_move(spec, 1)[1] - first[1]
+    assert abs(step) < 0.25 * abs(m["pan_deg"]) / (n - 1)
+    a, b = random_scene.solve_jitter(spec, 3), random_scene.solve_jitter(spec, 4)
+    assert a != b and a == random_scene.solve_jitter(spec, 3)
+    assert max(map(abs, a[0])) < 0.02 and max(map(abs, a[1])) < 0.15
+    assert "slide" in random_scene.describe(spec)
+    assert random_scene.camera_move(random_scene.draw("1", SP), 0) is None
