@@ -52,8 +52,11 @@ class CLIP_OT_sunlapse_check_scene(bpy.types.Operator):
             "No ground in view: model the surface the shadows fall on (a plane under the "
             "objects) and pick it as Ground"]
         if moved is not None:
-            doubts.append(f"the camera moves over the clip ({moved}): Estimate Sun needs a "
-                          f"camera that stays put (set a Frame Range where it does)")
+            # Estimated: each frame seen from the camera's pose on it.
+            msg += f"; the camera moves over the clip ({moved})"
+            if settings.method != "default":
+                doubts.append("the thesis method needs a camera that stays put: use the "
+                              "default method")
         if solve is not None:
             words, doubtful = solve
             if doubtful:

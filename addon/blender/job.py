@@ -4,15 +4,17 @@ the frames' capture times and the place and time), and what the track
 records about them. bpy reads only, on the main thread."""
 
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 import bpy
+import numpy as np
 
 from . import gather
 from .place import PlaceTimeFlags, place_and_time, settings_zone
-from ..core import clock, exif, frametimes
+from ..core import camerapath, clock, exif, frametimes
 from ..estimate import native_loader
 from ..estimate.options import EstimateOptions
+from ..estimate.whole_clip import NO_POSE
 
 
 @dataclass
@@ -169,31 +171,56 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
             options.latitude_deg, options.longitude_deg = known
     scene, camera = gather.build_scene(model), gather.build_camera(cam)
     doubts = view_doubts(model, cam, scene, camera, names)
-    for w in cam.warnings + gather.ground_doubts(model, names) + doubts:
+    numbers = list(range(frames[0], frames[1] + 1))
+    frame_cameras, motion_notes = None, []
+    if moved is not None:
+        frame_cameras, motion_notes = moving_camera(context, camera_obj, cam, numbers,
+                                                    track_extra, moved)
+    for w in cam.warnings + gather.ground_doubts(model, names) + doubts + motion_notes:
         if warnings is None:  # scripted runs: on stdout with the run's other warnings
             print(f"sunlapse: warning: {w}")
         else:
             warnings.append(w)
-    numbers = list(range(frames[0], frames[1] + 1))
-    frame_cameras = None
-    if moved is not None:
-        frame_cameras = moving_camera(context, camera_obj, cam, numbers, track_extra, moved)
     return RunJob(scene, camera, clip, numbers, options, track_extra, frame_cameras)
 
 
 def moving_camera(context, obj, cam, frames: List[int], record: Dict[str, Any],
-                  moved: str) -> Dict[int, Any]:
-    """The native camera on each frame of a moving camera (None where its
-    solve has no pose); the track records the motion and the frames
-    without a pose."""
+                  moved: str) -> Tuple[Dict[int, Any], List[str]]:
+    """({frame: the native camera on it, or why it has none (no solved pose,
+    the solve jumping off its path there)}, what the user should hear of
+    the solve) for a moving camera; the track records the motion and the
+    frames left out."""
     path = gather.camera_path(context, obj, cam, frames)
     unposed = [f for f in frames if path[f] is None]
     if len(unposed) == len(frames):
         raise gather.SceneError(
             f"The camera '{cam.name}' has no solved pose on frames {frames[0]}-{frames[-1]}: "
             f"solve the camera over them (Movie Clip Editor › Solve Camera Motion)")
-    record["moving_camera"] = {"motion": moved, "frames_without_pose": unposed}
-    return {f: None if info is None else gather.build_camera(info) for f, info in path.items()}
+    posed = [f for f in frames if path[f] is not None]
+    matrices = np.array([path[f].params["matrix_world"] for f in posed])
+    rotations = matrices[:, :3, :3] / np.linalg.norm(matrices[:, :3, :3], axis=1)[:, None, :]
+    jumped = camerapath.solve_jumps(posed, matrices[:, :3, 3], rotations)
+    out: Dict[int, Any] = {f: NO_POSE for f in unposed}
+    out.update(jumped)
+    out.update({f: gather.build_camera(path[f]) for f in posed if f not in jumped})
+    record["moving_camera"] = {"motion": moved, "frames_without_pose": unposed,
+                               "frames_off_the_solve": sorted(jumped)}
+    notes = []
+    if unposed:
+        notes.append(f"the camera '{cam.name}' has no solved pose on {len(unposed)} frame(s) "
+                     f"({_frames_said(unposed)}): they get no estimate of their own")
+    if jumped:
+        notes.append(f"the camera solve jumps off its path on {len(jumped)} frame(s) "
+                     f"({_frames_said(sorted(jumped))}): they are not used (check the tracks "
+                     f"there and solve again)")
+    solve = gather.camera_solve(context, obj)
+    if solve is not None and solve[1]:
+        notes.append(solve[0])
+    return out, notes
+
+
+def _frames_said(frames: List[int], most: int = 6) -> str:
+    return ", ".join(map(str, frames[:most])) + (" ..." if len(frames) > most else "")
 
 
 def view_doubts(model, cam, scene, camera, ground: List[str]) -> List[str]:

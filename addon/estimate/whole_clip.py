@@ -199,12 +199,22 @@ class RawFrame:
     segment: int = 0
     measured: bool = False        # the frame's own evidence supports it
     refined: bool = False         # the tracker refined it to sub-degree
-    tracked: object = None        # native TrackedFrame when refined
+    tracked: object = None        # native TrackedFrame when refined (FrameShadow:
+    #                               a moving camera's, in its frame's pixels)
     # The Sun on its segment's circle about the pole, where one was fitted.
     circle_in_world: Optional[np.ndarray] = None
     # Direct sunlight on the frame; without it the frame keeps no Sun of
     # its own (finish.py predicts one from the segment's path).
     sunlight: Sunlight = Sunlight.UNKNOWN
+
+
+@dataclass
+class FrameShadow:
+    """The tracked shadow on a moving camera's frame, in the frame's own
+    pixels at the working size (what finish.py reads of a TrackedFrame)."""
+    shadow_start_px: Tuple[float, float]
+    shadow_end_px: Tuple[float, float]
+    contrast: float
 
 
 @dataclass
@@ -262,11 +272,16 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
+# Why a moving camera's frame is not used when its pose is missing.
+NO_POSE = "the camera has no pose on this frame (not solved)"
+
+
 def reference_camera(frame_cameras: Dict[int, Any], frames: Sequence[int]):
     """The view a moving camera's frames are seen from: its pose on the
     posed frame nearest the middle of the run (the views either side differ
     least from it)."""
-    posed = [f for f in frames if frame_cameras.get(f) is not None]
+    posed = [f for f in frames if frame_cameras.get(f) is not None
+             and not isinstance(frame_cameras[f], str)]
     if not posed:
         raise EstimateError("the camera has no pose on any frame of the run")
     return frame_cameras[posed[len(posed) // 2]]
@@ -477,7 +492,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
     unknown); a frame whose Sun is below the horizon has no direct
     sunlight, unless the footage contradicts the times
     (night_by_the_clock). `frame_cameras`: a moving camera, {frame: the
-    native camera on it, of `camera`'s size, or None where it has no pose};
+    native camera on it, of `camera`'s size, or where it has no pose None
+    or a sentence saying why};
     every frame is then seen from one of them (motion/view_warp.h)."""
     return _WholeClip(native, scene, camera, frames, read_gray, ground_object_ids, times_s,
                       ignore_top_rows, progress, stream, source, fit_circle,
@@ -532,8 +548,8 @@ class _WholeClip:
                 raise EstimateError("the camera sees none of the model on the frame its "
                                     "moving view is taken from (the middle of the run)")
             self.frame_work = {
-                f: None if c is None else
-                c if factor == 1 else c.resized(self.work.width, self.work.height)
+                f: c if c is None or isinstance(c, str) or factor == 1
+                else c.resized(self.work.width, self.work.height)
                 for f, c in frame_cameras.items()}
         self.top = -(-ignore_top_rows // factor)
         self.result.tracker_pixel_scale = camera.width / self.work.width
@@ -584,6 +600,8 @@ class _WholeClip:
         self.release_sky()
         self.doubt_off_circle()
         self.sunlight_against_circle()
+        if self.moving:
+            self.shadows_in_their_frames()
         self.result.timing = self.timing()
         return self.result
 
@@ -657,10 +675,13 @@ class _WholeClip:
         else:
             frame_source, index_of = self.source(rest, (self.work.width, self.work.height))
             if self.moving:
-                by_index: List[Any] = [None] * (max(index_of.values(), default=-1) + 1)
+                size = max(index_of.values(), default=-1) + 1
+                by_index: List[Any] = [None] * size
+                why_not = [""] * size
                 for f, i in index_of.items():
-                    by_index[i] = self.frame_work.get(f)
-                frame_source = native.WarpedSource(frame_source, self.view, by_index)
+                    c = self.frame_work.get(f)
+                    by_index[i], why_not[i] = (c, "") if not isinstance(c, str) else (None, c)
+                frame_source = native.WarpedSource(frame_source, self.view, by_index, why_not)
         progress = self.progress
         self.done = native.run_clip_pass(
             frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
@@ -978,6 +999,25 @@ class _WholeClip:
 
     # -- small helpers -----------------------------------------------------
 
+    def shadows_in_their_frames(self) -> None:
+        """A moving camera's tracked shadows were found in the reference
+        view: each is carried through the model to its own frame's pixels
+        (at the working size), where the overlay draws it on the footage."""
+        for r in self.result.frames:
+            t: Any = r.tracked
+            camera = self.frame_work.get(r.frame)
+            if t is None:
+                continue
+            ends = np.array([t.shadow_start_px, t.shadow_end_px], dtype=np.float64)
+            moved = np.full((2, 2), np.nan)
+            if camera is not None and not isinstance(camera, str) and np.isfinite(ends).all():
+                points = self.scene.intersect_pixels(self.work, ends)["point"]
+                if np.isfinite(points).all():
+                    moved = camera.project(points.astype(np.float64))[0]
+            r.tracked = FrameShadow((float(moved[0][0]), float(moved[0][1])),
+                                    (float(moved[1][0]), float(moved[1][1])),
+                                    float(t.contrast))
+
     def read_again(self, k: int) -> Optional[np.ndarray]:
         """Frame k at the working size: as the pass kept it (the check was
         likely to want it), else read again."""
@@ -1005,8 +1045,8 @@ class _WholeClip:
         if gray is None:
             return image
         camera = self.frame_work.get(f)
-        if camera is None:
-            return "the camera has no pose on this frame (not solved)"
+        if camera is None or isinstance(camera, str):
+            return camera or NO_POSE
         warped, _, why, _ = self.view.warp(gray, camera)
         return warped if warped is not None else why
 

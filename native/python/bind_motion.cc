@@ -56,12 +56,16 @@ void BindMotion(py::module_& m) {
   py::class_<WarpedSource, FrameSource>(
       m, "WarpedSource",
       "A FrameSource whose frames come resampled into a ViewWarp's reference "
-      "view: the frame with index i was taken by cameras[i] (None: no pose).")
+      "view: the frame with index i was taken by cameras[i] (None: no pose, "
+      "why_not[i] saying why when given).")
       .def(py::init([](FrameSource& inner, const ViewWarp& warp,
-                       const std::vector<std::optional<Camera>>& cameras) {
-             return std::make_unique<WarpedSource>(&inner, &warp, cameras);
+                       const std::vector<std::optional<Camera>>& cameras,
+                       const std::vector<std::string>& why_not) {
+             return std::make_unique<WarpedSource>(&inner, &warp, cameras,
+                                                   why_not);
            }),
            py::arg("source"), py::arg("warp"), py::arg("cameras"),
+           py::arg("why_not") = std::vector<std::string>(),
            py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
 }
 

@@ -139,12 +139,12 @@ def test_a_camera_that_sees_no_model_is_a_one_line_user_error(empty_scene, tmp_p
         bpy.ops.clip.sunlapse_check_scene()
 
 
-def test_a_moving_camera_is_told_not_estimated(empty_scene):
+def test_camera_motion_is_measured_from_the_evaluated_poses(empty_scene):
     """Issue 26: a camera keyed per frame (a slider's, as a solve delivers
     it) was read on one frame, and the track came out 66 deg off on
-    average, without a word. Until moving cameras are estimated, a camera
-    that moves over the frames is a user error that says how far it moves;
-    one keyed still, or with a solve's jitter, is not."""
+    average, without a word. Whether it moves, and how far, is decided from
+    its poses (the run then sees each frame from its own, and Check Scene
+    says so); one keyed still, or with a solve's jitter, stays put."""
     import math
     from sunlapse.blender import gather
     scene = empty_scene

@@ -567,6 +567,18 @@ def test_a_moving_camera_is_estimated_from_its_pose_on_every_frame(world):
         assert r.sun_in_world is not None, (k, r.reason)
         errors.append(error_deg(r.sun_in_world, truth[k]))
     assert np.mean(errors) < 0.5 and max(errors) < 1.0, errors
+    # The overlay's shadow on the first and last frames, in their own
+    # pixels: its foot is on a caster's footprint in the world.
+    footprints = [((-0.08, -0.08), (0.08, 0.08)), ((2.0, 1.0), (3.2, 2.2)),
+                  ((-4.0, 3.0), (1.0, 3.25))]
+    for k in (0, n - 1):
+        shadow = result.frames[k].tracked
+        hit = scene.intersect_pixels(cameras[k + 1],
+                                     np.array([shadow.shadow_start_px], np.float64))
+        x, y = hit["point"][0][:2]
+        off = min(math.hypot(max(lo[0] - x, 0, x - hi[0]), max(lo[1] - y, 0, y - hi[1]))
+                  for lo, hi in footprints)
+        assert off < 0.25, (k, x, y)
     still = whole_clip.estimate(native, scene, cameras[12], numbers,
                                 lambda f: frames[f - 1], [0])
     off = [error_deg(r.sun_in_world, truth[k]) for k, r in enumerate(still.frames)

@@ -147,8 +147,12 @@ ViewWarpResult ViewWarp::Warp(const cv::Mat& frame, const Camera& camera,
 }
 
 WarpedSource::WarpedSource(FrameSource* inner, const ViewWarp* warp,
-                           std::vector<std::optional<Camera>> cameras_by_index)
-    : inner_(inner), warp_(warp), cameras_(std::move(cameras_by_index)) {
+                           std::vector<std::optional<Camera>> cameras_by_index,
+                           std::vector<std::string> why_not)
+    : inner_(inner),
+      warp_(warp),
+      cameras_(std::move(cameras_by_index)),
+      why_not_(std::move(why_not)) {
   Require(inner_ != nullptr && warp_ != nullptr,
           "WarpedSource needs a source and a warp");
 }
@@ -162,7 +166,10 @@ bool WarpedSource::Next(StreamedFrame* frame) {
   const int i = frame->index;
   if (i < 0 || i >= static_cast<int>(cameras_.size()) || !cameras_[i]) {
     frame->status = StreamedFrame::Status::kUnusable;
-    frame->message = "the camera has no pose on this frame (not solved)";
+    const bool said =
+        i >= 0 && i < static_cast<int>(why_not_.size()) && !why_not_[i].empty();
+    frame->message = said ? why_not_[i]
+                          : "the camera has no pose on this frame (not solved)";
     frame->gray.release();
     return true;
   }

@@ -123,8 +123,8 @@ TEST(WarpedSource, FramesWithoutAPoseOrOutOfViewComeOutUnusableWithTheReason) {
   const Scene scene = testing::BoxAndPole().Build();
   const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
   const Camera away = LookAt({3, -11, 8}, {3, -30, 12}, kW, kH);
-  std::vector<StreamedFrame> frames(3);
-  for (int i = 0; i < 3; ++i) {
+  std::vector<StreamedFrame> frames(4);
+  for (int i = 0; i < 4; ++i) {
     frames[i].index = i;
     frames[i].status = StreamedFrame::Status::kOk;
     frames[i].gray = RenderLambertian(scene, reference, kDown, Flat());
@@ -132,7 +132,9 @@ TEST(WarpedSource, FramesWithoutAPoseOrOutOfViewComeOutUnusableWithTheReason) {
   }
   FrameList list(std::move(frames));
   const ViewWarp warp(scene, reference);
-  WarpedSource source(&list, &warp, {reference, std::nullopt, away});
+  WarpedSource source(&list, &warp,
+                      {reference, std::nullopt, away, std::nullopt},
+                      {"", "", "", "the solve jumps here"});
   StreamedFrame f;
   ASSERT_TRUE(source.Next(&f));
   EXPECT_EQ(f.status, StreamedFrame::Status::kOk);
@@ -144,6 +146,9 @@ TEST(WarpedSource, FramesWithoutAPoseOrOutOfViewComeOutUnusableWithTheReason) {
   ASSERT_TRUE(source.Next(&f));
   EXPECT_EQ(f.status, StreamedFrame::Status::kUnusable);
   EXPECT_NE(f.message.find("of the model"), std::string::npos);
+  ASSERT_TRUE(source.Next(&f));
+  EXPECT_EQ(f.status, StreamedFrame::Status::kUnusable);
+  EXPECT_EQ(f.message, "the solve jumps here");
   EXPECT_FALSE(source.Next(&f));
 }
 

@@ -82,18 +82,21 @@ class ViewWarp {
 
 // A FrameSource whose frames come resampled into a ViewWarp's reference
 // view: the frame with index i from `inner` was taken by cameras[i]. A
-// frame without a camera (the solve has no pose there) or out of view comes
-// out unusable with the reason. Both must outlive this.
+// frame without a camera comes out unusable with why_not[i] (when given and
+// not empty) as its reason, one out of view with the warp's. Both must
+// outlive this.
 class WarpedSource : public FrameSource {
  public:
   WarpedSource(FrameSource* inner, const ViewWarp* warp,
-               std::vector<std::optional<Camera>> cameras_by_index);
+               std::vector<std::optional<Camera>> cameras_by_index,
+               std::vector<std::string> why_not = {});
   bool Next(StreamedFrame* frame) override;
 
  private:
   FrameSource* inner_;
   const ViewWarp* warp_;
   std::vector<std::optional<Camera>> cameras_;
+  std::vector<std::string> why_not_;
 };
 
 }  // namespace sunlapse
