@@ -446,9 +446,14 @@ int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
   }
   if (used == 0) return 0;
   m.reference.assign(S, 0.f);
+  // A moving camera's sample seen by few of the reference frames (near the
+  // edge of the view at one end of the move) would take its level from
+  // them alone, shadowed or not: it is left out. A fixed camera's samples
+  // are all seen by every frame.
+  const size_t enough = static_cast<size_t>((used + 1) / 2);
   for (int s = 0; s < S; ++s) {
     auto& x = per_sample[s];
-    if (x.empty()) {  // never seen by the reference frames: left out
+    if (x.empty() || x.size() < enough) {
       m.reference[s] = std::numeric_limits<float>::quiet_NaN();
       continue;
     }
