@@ -17,7 +17,10 @@ void BindMotion(py::module_& m) {
              "view")
       .field("hidden_share", &ViewWarpOptions::hidden_share,
              "a point is hidden when the camera's ray hits the model this "
-             "share of its distance nearer");
+             "share of its distance nearer")
+      .field("depth_step", &ViewWarpOptions::depth_step,
+             "the frame's distance to the model cast on every this many "
+             "pixels (1: all)");
 
   py::enum_<ViewWarpResult::Status>(m, "ViewWarpStatus")
       .value("OK", ViewWarpResult::Status::kOk)
@@ -66,7 +69,9 @@ void BindMotion(py::module_& m) {
            }),
            py::arg("source"), py::arg("warp"), py::arg("cameras"),
            py::arg("why_not") = std::vector<std::string>(),
-           py::keep_alive<1, 2>(), py::keep_alive<1, 3>());
+           py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
+      .def_property_readonly("seconds", &WarpedSource::seconds,
+                             "seconds spent resampling so far");
 }
 
 }  // namespace sunlapse::python

@@ -92,6 +92,28 @@ TEST(ViewWarp,
   EXPECT_LT(wrong, ground_seen / 200) << wrong << " of " << ground_seen;
 }
 
+TEST(ViewWarp, TheCoarseDepthGridSeesWhatARayPerPointSees) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  const Camera moved = LookAt({-1, -11, 6}, {-1, 1, 0}, kW, kH);
+  const cv::Mat frame = RenderLambertian(scene, moved, kDown, Flat());
+  ViewWarpOptions exact;
+  exact.depth_step = 1;
+  cv::Mat coarse_out, exact_out;
+  const ViewWarpResult coarse =
+      ViewWarp(scene, reference).Warp(frame, moved, &coarse_out);
+  const ViewWarpResult every =
+      ViewWarp(scene, reference, exact).Warp(frame, moved, &exact_out);
+  ASSERT_EQ(coarse.status, ViewWarpResult::Status::kOk);
+  int differ = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      differ += std::isnan(coarse_out.at<float>(y, x)) !=
+                std::isnan(exact_out.at<float>(y, x));
+  EXPECT_LT(differ, kW * kH / 500) << differ;
+  EXPECT_NEAR(coarse.seen_share, every.seen_share, 0.002);
+}
+
 TEST(ViewWarp, ACameraLookingAwayIsOutOfView) {
   const Scene scene = testing::BoxAndPole().Build();
   const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "sunlapse/scene/camera.h"
@@ -34,10 +35,14 @@ struct ViewWarpOptions {
   // A frame is used when it sees at least this share of the model surface
   // the reference view sees; below, it is reported out of view.
   double min_seen_share = 0.2;
-  // A surface point is hidden from a frame's camera when the camera's ray
-  // toward it first hits the model this much nearer than the point (share
-  // of the distance; a grazing wall's depth varies within a pixel).
+  // A surface point is hidden from a frame's camera when the model is this
+  // much nearer than the point along the camera's ray toward it (share of
+  // the distance; a grazing wall's depth varies within a pixel).
   double hidden_share = 0.01;
+  // The frame camera's distance to the model is cast on every depth_step-th
+  // pixel of the frame and interpolated between (pixels; 1: every pixel).
+  // Behind an outline a band of up to this many pixels is left out.
+  int depth_step = 8;
   void Check() const;
 };
 
@@ -68,12 +73,22 @@ class ViewWarp {
   // Pixels of the reference view that see the model.
   int model_pixels() const;
 
+  // Work buffers one caller keeps from frame to frame.
+  struct Scratch {
+    std::vector<Eigen::Vector2d> grid;
+    std::vector<float> depth;
+    std::vector<Eigen::Vector2f> at;
+    std::vector<uint8_t> outline;
+    std::vector<int> cast;
+  };
+
   // Frame (CV_32F gray of `camera`'s size, or empty) taken by `camera` ->
   // *out, CV_32F of the reference camera's size, NaN where the frame does
   // not see the reference pixel's surface point (and where the reference
-  // view sees no model). Thread-safe.
-  ViewWarpResult Warp(const cv::Mat& frame, const Camera& camera,
-                      cv::Mat* out) const;
+  // view sees no model). Thread-safe with a scratch per thread (none: its
+  // own, allocated for the call).
+  ViewWarpResult Warp(const cv::Mat& frame, const Camera& camera, cv::Mat* out,
+                      Scratch* scratch = nullptr) const;
 
  private:
   struct Impl;
@@ -91,12 +106,16 @@ class WarpedSource : public FrameSource {
                std::vector<std::optional<Camera>> cameras_by_index,
                std::vector<std::string> why_not = {});
   bool Next(StreamedFrame* frame) override;
+  // Seconds spent resampling so far.
+  double seconds() const { return seconds_; }
 
  private:
   FrameSource* inner_;
   const ViewWarp* warp_;
   std::vector<std::optional<Camera>> cameras_;
   std::vector<std::string> why_not_;
+  ViewWarp::Scratch scratch_;
+  double seconds_ = 0.0;
 };
 
 }  // namespace sunlapse
