@@ -60,16 +60,19 @@ void BindMotion(py::module_& m) {
       m, "WarpedSource",
       "A FrameSource whose frames come resampled into a ViewWarp's reference "
       "view: the frame with index i was taken by cameras[i] (None: no pose, "
-      "why_not[i] saying why when given).")
+      "why_not[i] saying why when given); resampled ahead on a thread of its "
+      "own, queue_frames at most waiting (0: on the caller's).")
       .def(py::init([](FrameSource& inner, const ViewWarp& warp,
                        const std::vector<std::optional<Camera>>& cameras,
-                       const std::vector<std::string>& why_not) {
+                       const std::vector<std::string>& why_not,
+                       int queue_frames) {
              return std::make_unique<WarpedSource>(&inner, &warp, cameras,
-                                                   why_not);
+                                                   why_not, queue_frames);
            }),
            py::arg("source"), py::arg("warp"), py::arg("cameras"),
            py::arg("why_not") = std::vector<std::string>(),
-           py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
+           py::arg("queue_frames") = 2, py::keep_alive<1, 2>(),
+           py::keep_alive<1, 3>())
       .def_property_readonly("seconds", &WarpedSource::seconds,
                              "seconds spent resampling so far");
 }

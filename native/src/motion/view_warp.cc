@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 
@@ -226,16 +227,28 @@ ViewWarpResult ViewWarp::Warp(const cv::Mat& frame, const Camera& camera,
 
 WarpedSource::WarpedSource(FrameSource* inner, const ViewWarp* warp,
                            std::vector<std::optional<Camera>> cameras_by_index,
-                           std::vector<std::string> why_not)
+                           std::vector<std::string> why_not, int queue_frames)
     : inner_(inner),
       warp_(warp),
       cameras_(std::move(cameras_by_index)),
-      why_not_(std::move(why_not)) {
+      why_not_(std::move(why_not)),
+      queue_frames_(queue_frames) {
   Require(inner_ != nullptr && warp_ != nullptr,
           "WarpedSource needs a source and a warp");
+  Require(queue_frames_ >= 0, "queue_frames must be 0 or more");
+  if (queue_frames_ > 0) worker_ = std::thread([this] { Work(); });
 }
 
-bool WarpedSource::Next(StreamedFrame* frame) {
+WarpedSource::~WarpedSource() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  changed_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+bool WarpedSource::Produce(StreamedFrame* frame) {
   if (!inner_->Next(frame)) return false;
   if (frame->status != StreamedFrame::Status::kOk) return true;
   // The source's 8-bit luma is the unwarped frame: only gray is handed on.
@@ -255,9 +268,13 @@ bool WarpedSource::Next(StreamedFrame* frame) {
   const auto t0 = std::chrono::steady_clock::now();
   const ViewWarpResult r =
       warp_->Warp(frame->gray, *cameras_[i], &warped, &scratch_);
-  seconds_ +=
+  const double took =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
           .count();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    seconds_ += took;
+  }
   if (r.status != ViewWarpResult::Status::kOk) {
     frame->status = StreamedFrame::Status::kUnusable;
     frame->message = r.message;
@@ -266,6 +283,51 @@ bool WarpedSource::Next(StreamedFrame* frame) {
   }
   frame->gray = warped;
   return true;
+}
+
+void WarpedSource::Work() {
+  for (;;) {
+    StreamedFrame frame;
+    bool more = false;
+    std::exception_ptr error;
+    try {
+      more = Produce(&frame);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (error || !more) {
+      error_ = error;
+      done_ = true;
+      changed_.notify_all();
+      return;
+    }
+    changed_.wait(lock, [this] {
+      return stop_ || static_cast<int>(queue_.size()) < queue_frames_;
+    });
+    if (stop_) return;
+    queue_.push_back(std::move(frame));
+    changed_.notify_all();
+  }
+}
+
+bool WarpedSource::Next(StreamedFrame* frame) {
+  if (queue_frames_ == 0) return Produce(frame);
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return !queue_.empty() || done_; });
+  if (!queue_.empty()) {
+    *frame = std::move(queue_.front());
+    queue_.pop_front();
+    changed_.notify_all();
+    return true;
+  }
+  if (error_) std::rethrow_exception(error_);
+  return false;
+}
+
+double WarpedSource::seconds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return seconds_;
 }
 
 }  // namespace sunlapse

@@ -174,5 +174,54 @@ TEST(WarpedSource, FramesWithoutAPoseOrOutOfViewComeOutUnusableWithTheReason) {
   EXPECT_FALSE(source.Next(&f));
 }
 
+TEST(WarpedSource, ResamplesOnTheCallersThreadOrAheadAlikeAndPassesErrorsOn) {
+  const Scene scene = testing::BoxAndPole().Build();
+  const Camera reference = LookAt({3, -11, 8}, {0, 0, 0}, kW, kH);
+  const Camera moved = LookAt({-1, -11, 6}, {-1, 1, 0}, kW, kH);
+  const ViewWarp warp(scene, reference);
+  auto frames = [&](int count, int width) {
+    std::vector<StreamedFrame> out(count);
+    for (int i = 0; i < count; ++i) {
+      out[i].index = i;
+      out[i].status = StreamedFrame::Status::kOk;
+      out[i].gray = width == kW ? RenderLambertian(scene, moved, kDown, Flat())
+                                : cv::Mat(kH, width, CV_32FC1, cv::Scalar(0.f));
+    }
+    return out;
+  };
+  std::vector<cv::Mat> got[2];
+  for (int queue : {0, 2}) {
+    FrameList list(frames(5, kW));
+    WarpedSource source(
+        &list, &warp, std::vector<std::optional<Camera>>(5, moved), {}, queue);
+    StreamedFrame f;
+    while (source.Next(&f)) got[queue > 0].push_back(f.gray);
+    EXPECT_GT(source.seconds(), 0.0);
+  }
+  ASSERT_EQ(got[0].size(), 5u);
+  ASSERT_EQ(got[1].size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    int same = 0;
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const float a = got[0][i].at<float>(y, x),
+                    b = got[1][i].at<float>(y, x);
+        same += a == b || (std::isnan(a) && std::isnan(b));
+      }
+    EXPECT_EQ(same, kW * kH);
+  }
+  // A frame of another size than its camera's: the warp's error, in Next.
+  FrameList wrong(frames(3, kW / 2));
+  WarpedSource source(&wrong, &warp,
+                      std::vector<std::optional<Camera>>(3, moved));
+  StreamedFrame f;
+  EXPECT_THROW(source.Next(&f), std::invalid_argument);
+  // Destroyed with frames still queued: the thread stops.
+  FrameList many(frames(8, kW));
+  WarpedSource early(&many, &warp,
+                     std::vector<std::optional<Camera>>(8, moved));
+  ASSERT_TRUE(early.Next(&f));
+}
+
 }  // namespace
 }  // namespace sunlapse

@@ -17,9 +17,14 @@
 // does.
 #pragma once
 
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Core>
@@ -98,24 +103,42 @@ class ViewWarp {
 // A FrameSource whose frames come resampled into a ViewWarp's reference
 // view: the frame with index i from `inner` was taken by cameras[i]. A
 // frame without a camera comes out unusable with why_not[i] (when given and
-// not empty) as its reason, one out of view with the warp's. Both must
-// outlive this.
+// not empty) as its reason, one out of view with the warp's. Frames are
+// read from `inner` and resampled ahead on a thread of its own, at most
+// queue_frames of them waiting (0: in Next, on the caller's thread), so
+// that resampling overlaps with the caller's work on the frame before.
+// Both must outlive this; `inner` is read from that thread only.
 class WarpedSource : public FrameSource {
  public:
   WarpedSource(FrameSource* inner, const ViewWarp* warp,
                std::vector<std::optional<Camera>> cameras_by_index,
-               std::vector<std::string> why_not = {});
+               std::vector<std::string> why_not = {}, int queue_frames = 2);
+  // Stops the thread (the frame being resampled is finished first).
+  ~WarpedSource();
+  WarpedSource(const WarpedSource&) = delete;
+  WarpedSource& operator=(const WarpedSource&) = delete;
+  // Rethrows what reading or resampling threw, in order.
   bool Next(StreamedFrame* frame) override;
   // Seconds spent resampling so far.
-  double seconds() const { return seconds_; }
+  double seconds() const;
 
  private:
+  bool Produce(StreamedFrame* frame);
+  void Work();
+
   FrameSource* inner_;
   const ViewWarp* warp_;
   std::vector<std::optional<Camera>> cameras_;
   std::vector<std::string> why_not_;
+  int queue_frames_;
   ViewWarp::Scratch scratch_;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<StreamedFrame> queue_;
+  bool done_ = false, stop_ = false;
+  std::exception_ptr error_;
   double seconds_ = 0.0;
+  std::thread worker_;
 };
 
 }  // namespace sunlapse
