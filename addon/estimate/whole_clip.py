@@ -272,19 +272,50 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
+# A moving camera's frame that sees less than this share of the samples where
+# shadows can show has them out of view: its sunlight is unknown, not "no".
+SHADOWS_IN_VIEW = 0.8
+SHADOWS_OUT_OF_VIEW = "the model's shadows are out of the camera's view on this frame"
+# A moving camera's reference view is chosen among this many posed frames
+# spread over the run, each probed with a ray per pixel of a view this
+# small (reference_camera).
+REFERENCE_CANDIDATES = 16
+REFERENCE_PROBE_WIDTH = 96
 # Why a moving camera's frame is not used when its pose is missing.
 NO_POSE = "the camera has no pose on this frame (not solved)"
 
 
-def reference_camera(frame_cameras: Dict[int, Any], frames: Sequence[int]):
-    """The view a moving camera's frames are seen from: its pose on the
-    posed frame nearest the middle of the run (the views either side differ
-    least from it)."""
+def reference_camera(scene, frame_cameras: Dict[int, Any], frames: Sequence[int],
+                     ground_ids: Sequence[int]):
+    """The view a moving camera's frames are seen from: among posed frames
+    spread over the run (REFERENCE_CANDIDATES), the pose that sees the most
+    of the casters (the model off the ground, where the shadows start), the
+    ground counting for a tenth; ties go to the middle of the run (the views
+    either side differ least from it)."""
     posed = [f for f in frames if frame_cameras.get(f) is not None
              and not isinstance(frame_cameras[f], str)]
     if not posed:
         raise EstimateError("the camera has no pose on any frame of the run")
-    return frame_cameras[posed[len(posed) // 2]]
+    middle = len(posed) // 2
+    picks = sorted({posed[i] for i in spread(len(posed), REFERENCE_CANDIDATES)} |
+                   {posed[middle]})
+    some = frame_cameras[posed[middle]]
+    w = REFERENCE_PROBE_WIDTH
+    h = max(1, round(w * some.height / some.width))
+    ys, xs = np.mgrid[0:h, 0:w]
+    pixels = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float64)
+    ground = np.array(list(ground_ids), dtype=np.int64)
+
+    def seen(f: int) -> float:
+        ids = scene.intersect_pixels(frame_cameras[f].resized(w, h), pixels)["object_id"]
+        on_ground = np.isin(ids, ground)
+        return float(np.count_nonzero((ids >= 0) & ~on_ground)
+                     + 0.1 * np.count_nonzero(on_ground))
+
+    scores = {f: seen(f) for f in picks}
+    best = max(scores.values())
+    return frame_cameras[min((f for f in picks if scores[f] >= 0.98 * best),
+                             key=lambda f: abs(posed.index(f) - middle))]
 
 
 def working_factor(width: int) -> int:
@@ -532,7 +563,7 @@ class _WholeClip:
         # fixed camera's.
         self.moving = frame_cameras is not None
         if self.moving:
-            camera = reference_camera(frame_cameras, self.frames)
+            camera = reference_camera(scene, frame_cameras, self.frames, ground_object_ids)
         # Large frames are reduced (WORKING_MAX_WIDTH): `work` is the camera
         # of the frames the evidence and the tracker see.
         factor = working_factor(camera.width)
@@ -541,6 +572,8 @@ class _WholeClip:
                                                               camera.height // factor)
         self.view: Any = None
         self.frame_work: Dict[int, Any] = {}
+        self.warped: Any = None  # the pass's WarpedSource
+        self.warp_s = 0.0        # resampling outside the pass
         if self.moving:
             try:
                 self.view = native.ViewWarp(scene, self.work)
@@ -601,6 +634,7 @@ class _WholeClip:
         self.doubt_off_circle()
         self.sunlight_against_circle()
         if self.moving:
+            self.less_sure_where_less_is_seen()
             self.shadows_in_their_frames()
         self.result.timing = self.timing()
         return self.result
@@ -681,7 +715,8 @@ class _WholeClip:
                 for f, i in index_of.items():
                     c = self.frame_work.get(f)
                     by_index[i], why_not[i] = (c, "") if not isinstance(c, str) else (None, c)
-                frame_source = native.WarpedSource(frame_source, self.view, by_index, why_not)
+                frame_source = self.warped = native.WarpedSource(frame_source, self.view,
+                                                                 by_index, why_not)
         progress = self.progress
         self.done = native.run_clip_pass(
             frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
@@ -696,6 +731,9 @@ class _WholeClip:
         usable_status = (int(native.FrameEvidenceStatus.OK),
                          int(native.FrameEvidenceStatus.NO_SHADOWS))
         self.usable = np.isin(self.done.status, usable_status)
+        # A moving camera's frame that does not see where the shadows fall
+        # cannot say there is no sunlight (decide_sunlight).
+        self.out_of_view = np.asarray(self.done.shadow_view) < SHADOWS_IN_VIEW
         self.mark("evidence")
 
     def solve_path(self) -> bool:
@@ -826,7 +864,9 @@ class _WholeClip:
             sunlit = tracked[k] or (r.sun_in_world is not None and r.measured and
                                     explained[k] >= SUNLIT_EXPLAINED_SHARE * typical)
             r.sunlight = Sunlight.YES if sunlit else \
-                Sunlight.NO if self.usable[k] else Sunlight.UNKNOWN
+                Sunlight.NO if self.usable[k] and not self.out_of_view[k] else Sunlight.UNKNOWN
+            if not sunlit and self.out_of_view[k]:
+                r.reason = SHADOWS_OUT_OF_VIEW
         for k in self.night_by_the_clock(tracked):
             frames[k].sunlight = Sunlight.NO
         bounds = _without_dark_segments(
@@ -999,6 +1039,16 @@ class _WholeClip:
 
     # -- small helpers -----------------------------------------------------
 
+    def less_sure_where_less_is_seen(self) -> None:
+        """A moving camera's frame that sees only part of where the shadows
+        can fall holds that share of the evidence: its confidence is scaled
+        by it (a frame seeing 73% of it, half the shadows out of view, came
+        out 9 deg off at 0.5)."""
+        seen = np.clip(np.asarray(self.done.shadow_view, dtype=float), 0.0, 1.0)
+        for k, r in enumerate(self.result.frames):
+            r.confidence *= float(seen[k])
+            r.on_circle *= float(seen[k])
+
     def shadows_in_their_frames(self) -> None:
         """A moving camera's tracked shadows were found in the reference
         view: each is carried through the model to its own frame's pixels
@@ -1047,7 +1097,9 @@ class _WholeClip:
         camera = self.frame_work.get(f)
         if camera is None or isinstance(camera, str):
             return camera or NO_POSE
+        t0 = time.perf_counter()
         warped, _, why, _ = self.view.warp(gray, camera)
+        self.warp_s += time.perf_counter() - t0
         return warped if warped is not None else why
 
     def motion_deg(self, k: int, j: int) -> float:
@@ -1077,7 +1129,9 @@ class _WholeClip:
                 "dark_again_s": c["dark_again"] - c["checked"] if "dark_again" in c else 0.0,
                 "frames_read": self.frames_read, "frames": n,
                 "total_s": time.perf_counter() - self.t0, **self.sky_sizes,
-                "directions": len(self.directions), "spacing_deg": self.spacing_deg}
+                "directions": len(self.directions), "spacing_deg": self.spacing_deg,
+                **({"warp_s": self.warp_s + (self.warped.seconds if self.warped else 0.0)}
+                   if self.moving else {})}
 
 
 def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_seconds: bool,

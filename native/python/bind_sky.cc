@@ -95,6 +95,7 @@ void BindSky(py::module_& m) {
       .def_readonly("margin", &FrameEvidence::margin)
       .def_readonly("significance", &FrameEvidence::significance)
       .def_readonly("exposure", &FrameEvidence::exposure)
+      .def_readonly("shadow_view", &FrameEvidence::shadow_view)
       .def_readonly("seconds", &FrameEvidence::seconds);
 
   py::class_<SkyEvidence>(

@@ -52,6 +52,17 @@ void BindWholeClip(py::module_& m) {
             return out;
           },
           "int8 per frame: its FrameEvidenceStatus value")
+      .def_property_readonly(
+          "shadow_view",
+          [](const ClipPassResult& r) {
+            py::array_t<float> out(static_cast<py::ssize_t>(r.frames.size()));
+            auto v = out.mutable_unchecked<1>();
+            for (size_t k = 0; k < r.frames.size(); ++k)
+              v(k) = static_cast<float>(r.frames[k].evidence.shadow_view);
+            return out;
+          },
+          "float32 per frame: the share of the samples where shadows can show "
+          "that the frame sees (below 1 for a moving camera's frame only)")
       .def(
           "reason",
           [](const ClipPassResult& r, size_t k) -> py::object {

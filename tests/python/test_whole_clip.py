@@ -584,3 +584,42 @@ def test_a_moving_camera_is_estimated_from_its_pose_on_every_frame(world):
     off = [error_deg(r.sun_in_world, truth[k]) for k, r in enumerate(still.frames)
            if r.sun_in_world is not None]
     assert not off or max(off) > 3.0, off
+    # The resampling's cost is timed (bench/moving_run.py prints it).
+    assert result.timing["warp_s"] > 0 and "warp_s" not in still.timing
+
+
+def test_a_camera_that_pans_away_from_the_casters_and_back(world):
+    """The model's casters leave the view in the middle of the clip (a pan
+    of 70 deg out and back): the reference view is taken where they are
+    seen, the frames that see them are within a degree, and the frames
+    that do not are not answered with confidence."""
+    n = 24
+    truth = [path(k, n) for k in range(n)]
+
+    def view(k):
+        pan = math.radians(-70.0 * math.sin(math.pi * k / (n - 1)))
+        c, si = math.cos(pan), math.sin(pan)
+        eye = np.array([-3.0, -9.0, 6.5])
+        target = eye + np.array([3.0 * c - 10.0 * si, 3.0 * si + 10.0 * c, -6.5])
+        return native.Camera.from_blender(lens_mm=28, sensor_width_mm=36, sensor_height_mm=24,
+                                          width=W, height=H, matrix_world=look_at(eye, target))
+    cameras = {k + 1: view(k) for k in range(n)}
+    frames = [draw_from(world, cameras[k + 1], truth[k], k) for k in range(n)]
+    scene = world[0]
+    chosen = whole_clip.reference_camera(scene, cameras, list(range(1, n + 1)), [0])
+    assert chosen is not cameras[n // 2 + 1]
+    result = whole_clip.estimate(native, scene, cameras[1], list(range(1, n + 1)),
+                                 lambda f: frames[f - 1], [0], frame_cameras=cameras)
+    near_ends = [k for k in range(n) if min(k, n - 1 - k) <= 2]
+    for k in near_ends:
+        r = result.frames[k]
+        assert r.sun_in_world is not None and error_deg(r.sun_in_world, truth[k]) < 1.0, (k, r)
+    for k, r in enumerate(result.frames):
+        if r.sun_in_world is not None and r.confidence >= 0.5:
+            assert error_deg(r.sun_in_world, truth[k]) < 5.0, (k, r)
+    # Looking away, the camera cannot tell whether the Sun shines: unknown,
+    # with the reason, never "no direct sunlight" (which keys the lamp off).
+    away = result.frames[n // 2]
+    assert away.sunlight == whole_clip.Sunlight.UNKNOWN, away
+    assert away.reason == whole_clip.SHADOWS_OUT_OF_VIEW
+    assert not any(r.sunlight == whole_clip.Sunlight.NO for r in result.frames)

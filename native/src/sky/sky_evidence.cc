@@ -138,6 +138,9 @@ struct SkyEvidence::Impl {
     int64_t lit, shade, end;
   };
   std::vector<uint16_t> band;
+  // Samples in some direction's band (where shadows can show), and how many.
+  std::vector<uint8_t> in_band;
+  int band_samples = 0;
   std::vector<Segment> segments;
   std::vector<int64_t> segments_begin;  // size D + 1
   // Right-hand grid neighbour of each sample in the same group (-1: none),
@@ -331,6 +334,10 @@ struct SkyEvidence::Impl {
     }
     band.shrink_to_fit();
     segments.shrink_to_fit();
+    in_band.assign(S(), 0);
+    for (uint16_t i : band) in_band[i] = 1;
+    band_samples = static_cast<int>(
+        std::count(in_band.begin(), in_band.end(), uint8_t{1}));
     build_seconds = Seconds(t0);
   }
 
@@ -418,6 +425,8 @@ std::vector<float> Seen(const std::vector<float>& v) {
 // A frame that sees less than this share of the samples (a moving camera's,
 // motion/view_warp.h) has the model out of view.
 constexpr double kMinSeenShare = 0.1;
+// A sample's reference level needs this many reference frames seeing it.
+constexpr size_t kMinReferenceFrames = 6;
 
 }  // namespace
 
@@ -446,11 +455,13 @@ int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
   }
   if (used == 0) return 0;
   m.reference.assign(S, 0.f);
-  // A moving camera's sample seen by few of the reference frames (near the
-  // edge of the view at one end of the move) would take its level from
-  // them alone, shadowed or not: it is left out. A fixed camera's samples
-  // are all seen by every frame.
-  const size_t enough = static_cast<size_t>((used + 1) / 2);
+  // A moving camera's sample seen by only a few of the reference frames
+  // (near the edge of the view at one end of the move) would take its level
+  // from them, shadowed or not: it is left out. Not more is asked: a camera
+  // that pans away from the casters and back sees them on under half of
+  // the clip. A fixed camera's samples are all seen by every frame.
+  const size_t enough =
+      std::min(static_cast<size_t>(used), kMinReferenceFrames);
   for (int s = 0; s < S; ++s) {
     auto& x = per_sample[s];
     if (x.empty() || x.size() < enough) {
@@ -522,6 +533,11 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
     if (std::isnan(m.reference[s]))
       v[s] = std::numeric_limits<float>::quiet_NaN();
     unseen += std::isnan(v[s]);
+  }
+  if (unseen > 0 && m.band_samples > 0) {
+    int seen_band = 0;
+    for (int s = 0; s < S; ++s) seen_band += m.in_band[s] && !std::isnan(v[s]);
+    out.shadow_view = static_cast<double>(seen_band) / m.band_samples;
   }
   if (S - unseen < std::max(1.0, kMinSeenShare * S)) {
     out.status = FrameEvidence::Status::kUnusable;

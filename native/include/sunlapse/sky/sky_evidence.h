@@ -132,6 +132,10 @@ struct FrameEvidence {
   // The median ratio of intensity to reference: the frame's exposure
   // relative to the reference frames.
   double exposure = 0.0;
+  // Share of the samples where shadows can show (some direction's band)
+  // that the frame sees: below 1 only for a moving camera's frame that
+  // does not see all of the reference view (motion/view_warp.h).
+  double shadow_view = 1.0;
   double seconds = 0.0;
 };
 
