@@ -39,7 +39,9 @@ footage brings (examples/random_scene.py PREFIXES):
   --moving N    moving1 ...: a motion-control shot: the camera slides 0.3-2 m,
                 pans 5-30 deg and on half of them tilts 1-4 deg, eased; the
                 scene.blend carries it keyed on every frame with a solve's
-                jitter (3 mm, 0.02 deg); casters may leave the view at the ends
+                jitter (3 mm, 0.02 deg); casters may leave the view at the
+                ends; from moving25 on, each pans away from the casters by
+                90% of its field of view and back instead
 Each is rendered by
 examples/generate_scene.py --random KEY at 320x180, 32 frames, into
 CACHE/<key>/ (default build/suite-cache/, outside git), and re-rendered only

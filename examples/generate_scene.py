@@ -5,7 +5,7 @@
       [--minutes-per-frame M]
   blender -b --factory-startup --python examples/generate_scene.py -- \
       --random KEY --out DIR [--tiny] [--frames N] [--resolution WxH] [--samples S]
-      [--spec-only]
+      [--spec-only] [--still-camera]
 
 --random builds a scene of the randomised suite (bench/suite.py): KEY is an
 integer seed or a fixed member (the plaza of issue 14); examples/random_scene.py
@@ -14,7 +14,9 @@ clouds, exposure drift, shake, noise, compression, or a room lit through a
 window; for the kinds of random_scene.PREFIXES also twilight, a rough
 model, an overcast run, buildings, several days with their nights, trees)
 and it is written to DIR/spec.json too. Its defaults are the suite's: 32
-frames at 320x180 (48 for multi-day members).
+frames at 320x180 (48 for multi-day members). --still-camera renders a
+moving member (moving<seed>) with its camera held at the drawn view: the
+same scene shot from a tripod (bench/moving_run.py's baseline).
 
 Writes into DIR:
   clip.mp4          the footage (Cycles, few samples, no denoising, H.264)
@@ -468,9 +470,13 @@ def parse_args(argv):
                    help="how many frames get a ground-truth shadow mask")
     p.add_argument("--spec-only", action="store_true",
                    help="with --random: write spec.json (what would be rendered) and stop")
+    p.add_argument("--still-camera", action="store_true",
+                   help="with --random moving<seed>: the camera held at the drawn view")
     args = p.parse_args(argv)
     if args.random is None and args.spec_only:
         p.error("--spec-only needs --random")
+    if args.still_camera and not str(args.random or "").startswith(random_scene.MOVING_PREFIX):
+        p.error(f"--still-camera needs --random {random_scene.MOVING_PREFIX}<seed>")
     if args.resolution:
         try:
             w, h = (int(v) for v in args.resolution.lower().split("x"))
@@ -731,6 +737,8 @@ def main_random(args, native):
     except ValueError as e:
         raise SystemExit(f"generate_scene: error: --random: {e}")
     frames = spec["render"]["frames"]  # multi-day members have more
+    if args.still_camera:
+        del spec["camera_motion"]
     if args.samples or args.tiny:
         spec["render"]["samples"] = args.samples or 4
     out = os.path.abspath(args.out)

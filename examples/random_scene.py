@@ -101,6 +101,12 @@ MOVING_PAN_DEG = (5.0, 30.0)
 MOVING_TILT_DEG = 4.0
 MOVING_JITTER_M = 0.003
 MOVING_JITTER_DEG = 0.02
+# Moving members from MOVING_AWAY_FROM on pan away from the drawn view and
+# back instead (by MOVING_AWAY_SHARE of their horizontal field of view, at
+# the middle of the clip): the casters and their shadows leave the view for
+# a while, as on a shot that sweeps past the scene.
+MOVING_AWAY_FROM = 25
+MOVING_AWAY_SHARE = 0.9
 # Every prefix of a member kind; a key is <prefix><seed> (seeds plain: the
 # static members).
 PREFIXES = (TWILIGHT_PREFIX, ROUGH_PREFIX, OVERCAST_PREFIX, URBAN_PREFIX, MULTIDAY_PREFIX,
@@ -1049,32 +1055,41 @@ def exposure_offset(spec, frame_index):
     return d["amplitude_ev"] * math.sin(2 * math.pi * frame_index / d["period_frames"] + d["phase"])
 
 
-def _draw_motion(rng, spec):
-    """A motion-control move through the drawn view (keys "moving<seed>")."""
+def _draw_motion(rng, spec, away=False):
+    """A motion-control move through the drawn view (keys "moving<seed>"),
+    or `away` from it and back."""
     right = camera_of(spec).right
     turn = math.radians(rng.uniform(-MOVING_RAIL_TURN_DEG, MOVING_RAIL_TURN_DEG))
     rail = _unit([right[0] * math.cos(turn) - right[1] * math.sin(turn),
                   right[0] * math.sin(turn) + right[1] * math.cos(turn), 0.0])
     tilt = rng.choice((-1.0, 1.0)) * rng.uniform(1.0, MOVING_TILT_DEG) \
         if rng.random() < 0.5 else 0.0
-    return {"slide_m": round(rng.uniform(*MOVING_SLIDE_M), 3),
-            "rail": [round(v, 5) for v in rail],
-            "pan_deg": round(rng.choice((-1.0, 1.0)) * rng.uniform(*MOVING_PAN_DEG), 2),
-            "tilt_deg": round(tilt, 2)}
+    motion = {"slide_m": round(rng.uniform(*MOVING_SLIDE_M), 3),
+              "rail": [round(v, 5) for v in rail],
+              "pan_deg": round(rng.choice((-1.0, 1.0)) * rng.uniform(*MOVING_PAN_DEG), 2),
+              "tilt_deg": round(tilt, 2)}
+    if away:
+        fov = 2.0 * math.degrees(math.atan(SENSOR_WIDTH_MM / 2.0 / spec["camera"]["lens_mm"]))
+        motion.update(away=True, pan_deg=round(math.copysign(MOVING_AWAY_SHARE * fov,
+                                                             motion["pan_deg"]), 2))
+    return motion
 
 
 def camera_move(spec, frame_index):
     """Where a moving member's camera is on frame `frame_index` (0-based)
     against the drawn view: (location offset [x, y, z] m, pan about the
     world's Z deg, tilt about the camera's own x axis deg). Eased
-    (smoothstep), zero on the middle frame; None for a still camera."""
+    (smoothstep), zero on the middle frame (an `away` member's pan: zero at
+    either end, full in the middle); None for a still camera."""
     m = spec.get("camera_motion")
     if m is None:
         return None
     n = spec["render"]["frames"]
     t = frame_index / max(1, n - 1)
     s = t * t * (3.0 - 2.0 * t) - 0.5
-    return ([m["slide_m"] * s * v for v in m["rail"]], m["pan_deg"] * s, m["tilt_deg"] * s)
+    # Away and back: the drawn view at either end, the full pan mid-clip.
+    turn = math.sin(math.pi * t) if m.get("away") else s
+    return ([m["slide_m"] * s * v for v in m["rail"]], m["pan_deg"] * turn, m["tilt_deg"] * s)
 
 
 def solve_jitter(spec, frame_index):
@@ -1197,7 +1212,7 @@ def draw(key, sun_position, frames=DEFAULT_FRAMES, resolution=DEFAULT_RESOLUTION
             # The run is the cloud and the ramp the exposure's change.
             spec["degradations"].update(clouds=[], exposure_drift=None)
         elif prefix == MOVING_PREFIX:
-            spec["camera_motion"] = _draw_motion(rng, spec)
+            spec["camera_motion"] = _draw_motion(rng, spec, seed >= MOVING_AWAY_FROM)
             spec["degradations"]["shake_deg"] = 0.0  # the solve's jitter instead
     spec["generator_version"] = GENERATOR_VERSION
     return spec
@@ -1223,7 +1238,8 @@ def describe(spec):
         flags.insert(0, f"{spec['multiday']['days']} days")
     if "camera_motion" in spec:
         m = spec["camera_motion"]
-        flags.insert(0, f"slide {m['slide_m']:.1f}m pan {m['pan_deg']:+.0f} "
+        flags.insert(0, f"slide {m['slide_m']:.1f}m pan {m['pan_deg']:+.0f}"
+                        f"{' away and back' if m.get('away') else ''} "
                         f"tilt {m['tilt_deg']:+.0f}")
     if spec.get("trees"):
         flags.insert(0, f"{len(spec['trees'])} trees")

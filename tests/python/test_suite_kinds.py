@@ -182,3 +182,16 @@ def test_moving_members_slide_and_pan_through_the_drawn_view(key):
     assert max(map(abs, a[0])) < 0.02 and max(map(abs, a[1])) < 0.15
     assert "slide" in random_scene.describe(spec)
     assert random_scene.camera_move(random_scene.draw("1", SP), 0) is None
+
+
+def test_moving_members_from_25_on_pan_away_from_the_casters_and_back():
+    spec = random_scene.draw("moving25", SP)
+    m = spec["camera_motion"]
+    assert m["away"] and "away and back" in random_scene.describe(spec)
+    n = spec["render"]["frames"]
+    fov = 2 * math.degrees(math.atan(18.0 / spec["camera"]["lens_mm"]))
+    assert math.isclose(abs(m["pan_deg"]), 0.9 * fov, abs_tol=0.01)
+    pans = [random_scene.camera_move(spec, i)[1] for i in range(n)]
+    assert pans[0] == 0.0 and abs(pans[-1]) < 1e-9  # the drawn view at either end
+    assert max(map(abs, pans)) > 0.95 * abs(m["pan_deg"])  # looking away mid-clip
+    assert "away" not in random_scene.draw("moving24", SP)["camera_motion"]
