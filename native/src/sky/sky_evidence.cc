@@ -612,12 +612,26 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
     noise = std::max(1e-6, sigma * sigma);
   }
   std::vector<float> rf(r.begin(), r.end());
+  // With unseen samples, each side's mean is over the seen ones alone: a
+  // group mean put in their place is not neutral (a side of unseen lit
+  // ground against seen shade still showed a contrast, and moving members'
+  // frames chose long shadows 8-21 deg off). `seen` counts them.
+  std::vector<float> seen_w;
+  if (unseen > 0) {
+    seen_w.resize(S);
+    for (int s = 0; s < S; ++s) {
+      seen_w[s] = std::isnan(v[s]) ? 0.f : 1.f;
+      rf[s] *= seen_w[s];
+    }
+  }
+  const int min_side = m.o.min_side_samples;
   std::vector<double> gain(D, 0.0);
   tbb::parallel_for(
       tbb::blocked_range<int>(0, D, 64),
       [&](const tbb::blocked_range<int>& range) {
         const uint16_t* idx = m.band.data();
         const float* ratio = rf.data();
+        const float* weight = seen_w.empty() ? nullptr : seen_w.data();
         for (int d = range.begin(); d < range.end(); ++d) {
           // Between-sides sum of squares of the band, per group, only where the
           // predicted shade is darker than the predicted light.
@@ -628,8 +642,13 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
             const float lit_sum = SumAt(ratio, idx + seg.lit, idx + seg.shade);
             const float shade_sum =
                 SumAt(ratio, idx + seg.shade, idx + seg.end);
-            const double n_lit = static_cast<double>(seg.shade - seg.lit);
-            const double n_shade = static_cast<double>(seg.end - seg.shade);
+            double n_lit = static_cast<double>(seg.shade - seg.lit);
+            double n_shade = static_cast<double>(seg.end - seg.shade);
+            if (weight != nullptr) {
+              n_lit = SumAt(weight, idx + seg.lit, idx + seg.shade);
+              n_shade = SumAt(weight, idx + seg.shade, idx + seg.end);
+              if (n_lit < min_side || n_shade < min_side) continue;
+            }
             const double mean_lit = lit_sum / n_lit,
                          mean_shade = shade_sum / n_shade;
             if (mean_shade >= mean_lit) continue;
