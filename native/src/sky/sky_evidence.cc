@@ -11,6 +11,7 @@
 #include <map>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 
@@ -493,6 +494,28 @@ float SumAt(const float* values, const uint16_t* first, const uint16_t* last) {
   return (s0 + s1) + (s2 + s3);
 }
 
+// A sample's ratio and whether it is seen, side by side: one gather reads
+// both (a second SumAt over the weights cost a moving frame's band pass
+// half again).
+struct SeenRatio {
+  float ratio, seen;
+};
+
+// (sum of ratios, samples seen) over the indices [first, last).
+std::pair<float, float> SumSeenAt(const SeenRatio* values,
+                                  const uint16_t* first, const uint16_t* last) {
+  float r0 = 0.f, r1 = 0.f, n0 = 0.f, n1 = 0.f;
+  for (; last - first >= 2; first += 2) {
+    const SeenRatio& a = values[first[0]];
+    const SeenRatio& b = values[first[1]];
+    r0 += a.ratio, n0 += a.seen;
+    r1 += b.ratio, n1 += b.seen;
+  }
+  for (; first < last; ++first)
+    r0 += values[*first].ratio, n0 += values[*first].seen;
+  return {r0 + r1, n0 + n1};
+}
+
 }  // namespace
 
 FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
@@ -615,13 +638,14 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   // With unseen samples, each side's mean is over the seen ones alone: a
   // group mean put in their place is not neutral (a side of unseen lit
   // ground against seen shade still showed a contrast, and moving members'
-  // frames chose long shadows 8-21 deg off). `seen` counts them.
-  std::vector<float> seen_w;
-  if (unseen > 0) {
-    seen_w.resize(S);
+  // frames chose long shadows 8-21 deg off). Only frames that miss some
+  // of the band take this way.
+  std::vector<SeenRatio> seen_ratio;
+  if (out.shadow_view < 1.0) {
+    seen_ratio.resize(S);
     for (int s = 0; s < S; ++s) {
-      seen_w[s] = std::isnan(v[s]) ? 0.f : 1.f;
-      rf[s] *= seen_w[s];
+      const bool seen = !std::isnan(v[s]);
+      seen_ratio[s] = {seen ? rf[s] : 0.f, seen ? 1.f : 0.f};
     }
   }
   const int min_side = m.o.min_side_samples;
@@ -631,7 +655,8 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
       [&](const tbb::blocked_range<int>& range) {
         const uint16_t* idx = m.band.data();
         const float* ratio = rf.data();
-        const float* weight = seen_w.empty() ? nullptr : seen_w.data();
+        const SeenRatio* weighted =
+            seen_ratio.empty() ? nullptr : seen_ratio.data();
         for (int d = range.begin(); d < range.end(); ++d) {
           // Between-sides sum of squares of the band, per group, only where the
           // predicted shade is darker than the predicted light.
@@ -639,14 +664,17 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
           for (int64_t k = m.segments_begin[d]; k < m.segments_begin[d + 1];
                ++k) {
             const Impl::Segment& seg = m.segments[k];
-            const float lit_sum = SumAt(ratio, idx + seg.lit, idx + seg.shade);
-            const float shade_sum =
-                SumAt(ratio, idx + seg.shade, idx + seg.end);
-            double n_lit = static_cast<double>(seg.shade - seg.lit);
-            double n_shade = static_cast<double>(seg.end - seg.shade);
-            if (weight != nullptr) {
-              n_lit = SumAt(weight, idx + seg.lit, idx + seg.shade);
-              n_shade = SumAt(weight, idx + seg.shade, idx + seg.end);
+            double lit_sum, shade_sum, n_lit, n_shade;
+            if (weighted == nullptr) {
+              lit_sum = SumAt(ratio, idx + seg.lit, idx + seg.shade);
+              shade_sum = SumAt(ratio, idx + seg.shade, idx + seg.end);
+              n_lit = static_cast<double>(seg.shade - seg.lit);
+              n_shade = static_cast<double>(seg.end - seg.shade);
+            } else {
+              std::tie(lit_sum, n_lit) =
+                  SumSeenAt(weighted, idx + seg.lit, idx + seg.shade);
+              std::tie(shade_sum, n_shade) =
+                  SumSeenAt(weighted, idx + seg.shade, idx + seg.end);
               if (n_lit < min_side || n_shade < min_side) continue;
             }
             const double mean_lit = lit_sum / n_lit,
