@@ -285,6 +285,12 @@ REFERENCE_PROBE_WIDTH = 96
 NO_POSE = "the camera has no pose on this frame (not solved)"
 
 
+def _posed(camera: Any) -> Any:
+    """A frame_cameras value as a camera, or None where the frame has no
+    pose (None, or a sentence saying why)."""
+    return None if camera is None or isinstance(camera, str) else camera
+
+
 def reference_camera(scene, frame_cameras: Dict[int, Any], frames: Sequence[int],
                      ground_ids: Sequence[int]):
     """The view a moving camera's frames are seen from: among posed frames
@@ -292,8 +298,7 @@ def reference_camera(scene, frame_cameras: Dict[int, Any], frames: Sequence[int]
     of the casters (the model off the ground, where the shadows start), the
     ground counting for a tenth; ties go to the middle of the run (the views
     either side differ least from it)."""
-    posed = [f for f in frames if frame_cameras.get(f) is not None
-             and not isinstance(frame_cameras[f], str)]
+    posed = [f for f in frames if _posed(frame_cameras.get(f)) is not None]
     if not posed:
         raise EstimateError("the camera has no pose on any frame of the run")
     middle = len(posed) // 2
@@ -571,7 +576,10 @@ class _WholeClip:
         self.work = camera if factor == 1 else camera.resized(camera.width // factor,
                                                               camera.height // factor)
         self.view: Any = None
+        # The frames' cameras at the working size (None: no pose) and, for
+        # those without a pose, why.
         self.frame_work: Dict[int, Any] = {}
+        self.why_no_pose: Dict[int, str] = {}
         self.warped: Any = None  # the pass's WarpedSource
         self.warp_s = 0.0        # resampling outside the pass
         if self.moving:
@@ -579,11 +587,13 @@ class _WholeClip:
                 self.view = native.ViewWarp(scene, self.work)
             except ValueError:
                 raise EstimateError("the camera sees none of the model on the frame its "
-                                    "moving view is taken from (the middle of the run)")
-            self.frame_work = {
-                f: c if c is None or isinstance(c, str) or factor == 1
-                else c.resized(self.work.width, self.work.height)
-                for f, c in frame_cameras.items()}
+                                    "moving view is taken from")
+            for f, c in frame_cameras.items():
+                posed = _posed(c)
+                self.frame_work[f] = posed if posed is None or factor == 1 else \
+                    posed.resized(self.work.width, self.work.height)
+                if posed is None:
+                    self.why_no_pose[f] = c or NO_POSE
         self.top = -(-ignore_top_rows // factor)
         self.result.tracker_pixel_scale = camera.width / self.work.width
         # Segments the caller knows of: capture times going back.
@@ -713,8 +723,8 @@ class _WholeClip:
                 by_index: List[Any] = [None] * size
                 why_not = [""] * size
                 for f, i in index_of.items():
-                    c = self.frame_work.get(f)
-                    by_index[i], why_not[i] = (c, "") if not isinstance(c, str) else (None, c)
+                    by_index[i] = self.frame_work.get(f)
+                    why_not[i] = self.why_no_pose.get(f, "")
                 frame_source = self.warped = native.WarpedSource(frame_source, self.view,
                                                                  by_index, why_not)
         progress = self.progress
@@ -1060,7 +1070,7 @@ class _WholeClip:
                 continue
             ends = np.array([t.shadow_start_px, t.shadow_end_px], dtype=np.float64)
             moved = np.full((2, 2), np.nan)
-            if camera is not None and not isinstance(camera, str) and np.isfinite(ends).all():
+            if camera is not None and np.isfinite(ends).all():
                 points = self.scene.intersect_pixels(self.work, ends)["point"]
                 if np.isfinite(points).all():
                     moved = camera.project(points.astype(np.float64))[0]
@@ -1095,8 +1105,8 @@ class _WholeClip:
         if gray is None:
             return image
         camera = self.frame_work.get(f)
-        if camera is None or isinstance(camera, str):
-            return camera or NO_POSE
+        if camera is None:
+            return self.why_no_pose.get(f, NO_POSE)
         t0 = time.perf_counter()
         warped, _, why, _ = self.view.warp(gray, camera)
         self.warp_s += time.perf_counter() - t0
