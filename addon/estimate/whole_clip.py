@@ -671,11 +671,15 @@ class _WholeClip:
         native, frames = self.native, self.frames
         wanted_reference = [frames[i] for i in spread(self.n)]
         size = (self.work.width, self.work.height)
-        # A moving camera's frames are read exactly (a key frame near the
-        # one asked would need its own pose).
+        # Reference frames need not be exact: the key frame before each
+        # asked is read (one decode after a seek). A moving camera's key
+        # frame needs a pose of its own, known when every frame of the run
+        # has one (a key frame before the run's first frame has none: that
+        # reference frame is left out).
+        near = not self.moving or frames == list(range(frames[0], frames[-1] + 1))
         reference_frames: Iterable[Tuple[int, Gray]] = (
             ((f, self.reduced(self.read_gray(f), f)) for f in wanted_reference)
-            if self.stream is None else self.stream(wanted_reference, not self.moving, size))
+            if self.stream is None else self.stream(wanted_reference, near, size))
         opts = native.SkyEvidenceOptions()
         opts.ignore_top_rows = self.top
         self.sky = native.SkyEvidence(self.scene, self.work, opts)
@@ -1173,11 +1177,13 @@ class _ClipReads:
     reference frames and the pass streamed by native readers, the few
     frames read again one at a time. The reference frames also come in
     colour, at the unmodelled-shadow note's size, for the clip's
-    shadow-free background (`samples`)."""
+    shadow-free background (`samples`), when `colour`: the note compares
+    frames pixel by pixel, so a moving camera's are not kept."""
 
-    def __init__(self, native, clip_path: str, source, camera, gamma: float):
+    def __init__(self, native, clip_path: str, source, camera, gamma: float,
+                 colour: bool = True):
         self.native, self.clip_path, self.source = native, clip_path, source
-        self.camera, self.gamma = camera, gamma
+        self.camera, self.gamma, self.colour = camera, gamma, colour
         self.stride = notes.note_stride(camera)
         self.samples: Dict[int, np.ndarray] = {}
         self.pass_stream: Any = None
@@ -1197,7 +1203,8 @@ class _ClipReads:
         try:
             frame_stream = native.FrameStream(
                 self.clip_path, [f - self.source.start for f in fs],
-                native.FrameStreamOptions(gamma=self.gamma, near=near, keep_bgr=near,
+                native.FrameStreamOptions(gamma=self.gamma, near=near,
+                                          keep_bgr=near and self.colour,
                                           width=size[0], height=size[1],
                                           bgr_width=-(-camera.width // self.stride),
                                           bgr_height=-(-camera.height // self.stride)))
@@ -1225,7 +1232,7 @@ class _ClipReads:
         for got in frame_stream:
             f = got.index + start
             if got.gray is not None:
-                if near:
+                if near and self.colour:
                     self.samples[f] = got.bgr
                 yield f, got.gray
             elif got.status == past_end:
@@ -1257,7 +1264,8 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     per segment (finish.py)."""
     native = native_loader.require()
     north = options.north_offset_deg
-    reads = _ClipReads(native, clip_path, source, camera, gamma(options.method))
+    reads = _ClipReads(native, clip_path, source, camera, gamma(options.method),
+                       colour=frame_cameras is None)
     seconds, elevation, ephemeris = None, None, {}
     if times is not None:
         by_time = dict(zip(frames, clock.seconds_since(times)))

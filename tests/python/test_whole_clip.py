@@ -623,3 +623,40 @@ def test_a_camera_that_pans_away_from_the_casters_and_back(world):
     assert away.sunlight == whole_clip.Sunlight.UNKNOWN, away
     assert away.reason == whole_clip.SHADOWS_OUT_OF_VIEW
     assert not any(r.sunlight == whole_clip.Sunlight.NO for r in result.frames)
+
+
+@pytest.mark.parametrize("every", [1, 2])
+def test_a_moving_camera_reads_key_frames_as_reference_when_all_have_poses(world, every):
+    """Reference frames are the clip's key frames near those asked (one
+    decode each): a moving camera's key frame is resampled with its own
+    pose. When the run skips frames a key frame may have none, so they are
+    read exactly (issue 26)."""
+    n = 24
+    truth = [path(k, n) for k in range(n)]
+    cameras = {k + 1: moving_view(k, n) for k in range(n)}
+    frames = [draw_from(world, cameras[k + 1], truth[k], k) for k in range(n)]
+    numbers = list(range(1, n + 1, every))
+    asked_near = []
+
+    class Stream:
+        frames_independent = False
+
+        def __init__(self, fs, near):
+            self.fs, self.near = fs, near
+            asked_near.append(near)
+
+        def __iter__(self):
+            # Key frames every 5 frames: the one at or before each asked.
+            for f in sorted({1 + 5 * ((f - 1) // 5) for f in self.fs} if self.near else self.fs):
+                yield f, frames[f - 1]
+
+    def source(fs, size):
+        return (native.FrameList([(i, frames[f - 1]) for i, f in enumerate(fs)]),
+                {f: i for i, f in enumerate(fs)})
+
+    result = whole_clip.estimate(native, world[0], cameras[12], numbers, None, [0],
+                                 stream=lambda fs, near, size: Stream(fs, near),
+                                 source=source, frame_cameras={f: cameras[f] for f in numbers})
+    assert asked_near == [every == 1]
+    errors = [error_deg(r.sun_in_world, truth[r.frame - 1]) for r in result.frames]
+    assert np.mean(errors) < 0.5 and max(errors) < 1.0, errors
