@@ -124,7 +124,9 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                   and track.method.get("tracking") == "whole_clip")
     track.method["confidence"] = (trackfile.ConfidenceKind.PROBABILITY if calibrated else
                                   trackfile.ConfidenceKind.SUPPORT).value
-    could_show = [r for r in raws if r.sunlight != Sunlight.NO]
+    # A frame without direct sunlight, or whose camera looks away from where
+    # the shadows fall, could not show the Sun.
+    could_show = [r for r in raws if r.sunlight != Sunlight.NO and r.shadows_in_view]
     measured = sum(r.has_sun for r in could_show)
     share = measured / len(could_show) if could_show else 1.0
     track.extra["sun_measured_share"] = round(share, 4)

@@ -16,6 +16,8 @@ class RawSun:
     it (its shadow's ends and sun/ambient contrast), when the tracker
     refined it. sunlight: direct sunlight on the frame, where the method
     decides it (a frame without it has no raw Sun: finish.py predicts one).
+    shadows_in_view: False where a moving camera looks away from where the
+    model's shadows fall (the frame could not show the Sun).
     clock_sun: (zenith, geographic azimuth) the ephemeris gives for the
     frame's capture time and place, where that puts it at night: its
     predicted Sun, below the horizon."""
@@ -27,6 +29,7 @@ class RawSun:
     tracked: Any = None
     sunlight: Optional[Sunlight] = None
     clock_sun: Optional[Tuple[float, float]] = None
+    shadows_in_view: bool = True
 
     @property
     def has_sun(self) -> bool:

@@ -206,6 +206,9 @@ class RawFrame:
     # Direct sunlight on the frame; without it the frame keeps no Sun of
     # its own (finish.py predicts one from the segment's path).
     sunlight: Sunlight = Sunlight.UNKNOWN
+    # False on a frame without sunlight whose moving camera does not see
+    # where the shadows fall (SHADOWS_IN_VIEW): it could not show the Sun.
+    shadows_in_view: bool = True
 
 
 @dataclass
@@ -879,6 +882,7 @@ class _WholeClip:
                                     explained[k] >= SUNLIT_EXPLAINED_SHARE * typical)
             r.sunlight = Sunlight.YES if sunlit else \
                 Sunlight.NO if self.usable[k] and not self.out_of_view[k] else Sunlight.UNKNOWN
+            r.shadows_in_view = sunlit or not self.out_of_view[k]
             if not sunlit and self.out_of_view[k]:
                 r.reason = SHADOWS_OUT_OF_VIEW
         for k in self.night_by_the_clock(tracked):
@@ -1332,11 +1336,10 @@ def _geographic(sun_in_world, north: float) -> Tuple[float, float]:
 
 
 def _raw_sun(r: RawFrame, north: float, clock_sun=None) -> RawSun:
-    if r.sun_in_world is None:
-        return RawSun(r.frame, confidence=r.on_circle, reason=r.reason, tracked=r.tracked,
-                      sunlight=r.sunlight, clock_sun=clock_sun)
-    return RawSun(r.frame, *_geographic(r.sun_in_world, north), confidence=r.on_circle,
-                  reason=r.reason, tracked=r.tracked, sunlight=r.sunlight, clock_sun=clock_sun)
+    angles_of = (None, None) if r.sun_in_world is None else _geographic(r.sun_in_world, north)
+    return RawSun(r.frame, *angles_of, confidence=r.on_circle, reason=r.reason,
+                  tracked=r.tracked, sunlight=r.sunlight, clock_sun=clock_sun,
+                  shadows_in_view=r.shadows_in_view)
 
 
 def _note(track, scene, camera, samples, by_frame, options) -> None:

@@ -140,6 +140,28 @@ def test_a_clip_whose_sun_was_seldom_measured_keeps_its_support_below_one_half()
     assert problem is not None and "2 of the 5 frames" in problem.message
 
 
+def test_frames_looking_away_from_the_shadows_do_not_count_against_the_clip():
+    """A moving camera's frames that do not see where the shadows fall could
+    not show the Sun: 9 of 10 measured stays a clip the map applies to,
+    however many frames looked away (issue 26)."""
+    raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97, sunlight=trackfile.Sunlight.YES)
+            for f in range(1, 10)] + [RawSun(10, sunlight=trackfile.Sunlight.UNKNOWN)]
+    away = [RawSun(f, sunlight=trackfile.Sunlight.UNKNOWN, shadows_in_view=False)
+            for f in range(11, 14)]
+
+    def share(frames):
+        track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                        "smoothing": "two_pass"})
+        finish.finish(None, track, frames, estimate_options.EstimateOptions(), None, None,
+                      [[r.frame for r in frames]])
+        return track.extra["sun_measured_share"], track.frames[0].confidence
+    assert share(raws) == (pytest.approx(0.9), pytest.approx(calibration.probability(0.97)))
+    assert share(raws + away) == share(raws)
+    # Counted as frames that could show it, they would doubt the clip.
+    counted = [RawSun(r.frame, sunlight=r.sunlight) for r in away]
+    assert share(raws + counted)[1] == calibration.DOUBTED_MAX_PROBABILITY
+
+
 def test_a_short_segment_split_off_the_clip_stays_below_one_half():
     assert calibration.short_segment_frames([[1, 2, 3], [4, 5, 6, 7, 8]]) == {1, 2, 3}
     assert calibration.short_segment_frames([[1, 2, 3]]) == set()  # the whole clip
