@@ -14,7 +14,7 @@ from .place import PlaceTimeFlags, place_and_time, settings_zone
 from ..core import camerapath, clock, exif, frametimes
 from ..estimate import native_loader
 from ..estimate.options import EstimateOptions
-from ..estimate.whole_clip import NO_POSE
+from ..estimate.moving_view import NO_POSE
 
 
 @dataclass

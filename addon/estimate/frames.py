@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, Union
+
+import numpy as np
 
 from . import native_loader
 from .errors import EstimateError
 from .options import gamma
+
+# A frame as float32 linear gray, or a sentence saying why there is none
+# (None: no reason known).
+Gray = Union[np.ndarray, str, None]
 
 
 def open_clip(path: str, index: int):

@@ -43,7 +43,9 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tupl
 import numpy as np
 
 from . import finish, frames as clip_frames, motion, native_loader, notes
+from .moving_view import SHADOWS_IN_VIEW, SHADOWS_OUT_OF_VIEW, MovingView, reference_camera
 from .errors import Cancelled, EstimateError
+from .frames import Gray
 from .options import gamma
 from .raw import RawSun
 from ..core import angles, clock, trackfile, trimmed_circle
@@ -212,15 +214,6 @@ class RawFrame:
 
 
 @dataclass
-class FrameShadow:
-    """The tracked shadow on a moving camera's frame, in the frame's own
-    pixels at the working size (what finish.py reads of a TrackedFrame)."""
-    shadow_start_px: Tuple[float, float]
-    shadow_end_px: Tuple[float, float]
-    contrast: float
-
-
-@dataclass
 class WholeClipResult:
     frames: List[RawFrame] = field(default_factory=list)   # in the order given
     segments: List[List[int]] = field(default_factory=list)  # frame numbers per segment
@@ -275,57 +268,6 @@ def _angle_deg(a, b) -> float:
     return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
 
 
-# A moving camera's frame that sees less than this share of the samples where
-# shadows can show has them out of view: its sunlight is unknown, not "no".
-SHADOWS_IN_VIEW = 0.8
-SHADOWS_OUT_OF_VIEW = "the model's shadows are out of the camera's view on this frame"
-# A moving camera's reference view is chosen among this many posed frames
-# spread over the run, each probed with a ray per pixel of a view this
-# small (reference_camera).
-REFERENCE_CANDIDATES = 16
-REFERENCE_PROBE_WIDTH = 96
-# Why a moving camera's frame is not used when its pose is missing.
-NO_POSE = "the camera has no pose on this frame (not solved)"
-
-
-def _posed(camera: Any) -> Any:
-    """A frame_cameras value as a camera, or None where the frame has no
-    pose (None, or a sentence saying why)."""
-    return None if camera is None or isinstance(camera, str) else camera
-
-
-def reference_camera(scene, frame_cameras: Dict[int, Any], frames: Sequence[int],
-                     ground_ids: Sequence[int]):
-    """The view a moving camera's frames are seen from: among posed frames
-    spread over the run (REFERENCE_CANDIDATES), the pose that sees the most
-    of the casters (the model off the ground, where the shadows start), the
-    ground counting for a tenth; ties go to the middle of the run (the views
-    either side differ least from it)."""
-    posed = [f for f in frames if _posed(frame_cameras.get(f)) is not None]
-    if not posed:
-        raise EstimateError("the camera has no pose on any frame of the run")
-    middle = len(posed) // 2
-    picks = sorted({posed[i] for i in spread(len(posed), REFERENCE_CANDIDATES)} |
-                   {posed[middle]})
-    some = frame_cameras[posed[middle]]
-    w = REFERENCE_PROBE_WIDTH
-    h = max(1, round(w * some.height / some.width))
-    ys, xs = np.mgrid[0:h, 0:w]
-    pixels = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float64)
-    ground = np.array(list(ground_ids), dtype=np.int64)
-
-    def seen(f: int) -> float:
-        ids = scene.intersect_pixels(frame_cameras[f].resized(w, h), pixels)["object_id"]
-        on_ground = np.isin(ids, ground)
-        return float(np.count_nonzero((ids >= 0) & ~on_ground)
-                     + 0.1 * np.count_nonzero(on_ground))
-
-    scores = {f: seen(f) for f in picks}
-    best = max(scores.values())
-    return frame_cameras[min((f for f in picks if scores[f] >= 0.98 * best),
-                             key=lambda f: abs(posed.index(f) - middle))]
-
-
 def working_factor(width: int) -> int:
     """The power of two a frame `width` wide is divided by to be at most
     WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
@@ -333,13 +275,6 @@ def working_factor(width: int) -> int:
     while width > factor * WORKING_MAX_WIDTH:
         factor *= 2
     return factor
-
-
-def spread(n: int, k: int = REFERENCE_FRAMES) -> List[int]:
-    """k positions spread evenly over range(n) (all of them when n <= k)."""
-    if n <= k:
-        return list(range(n))
-    return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
 
 
 def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
@@ -493,7 +428,6 @@ def _frame(read: Union[np.ndarray, str, None]) -> Optional[np.ndarray]:
     return read if isinstance(read, np.ndarray) else None
 
 
-Gray = Union[np.ndarray, str, None]
 # (frames, (width, height)) -> (a native FrameSource, {frame: its index})
 SourceFn = Callable[[Sequence[int], Tuple[int, int]], Tuple[object, dict]]
 
@@ -567,10 +501,9 @@ class _WholeClip:
         self.tracking_s = 0.0
         self.checked = 0
         # A moving camera's frames are seen from one of its views, the
-        # reference (motion/view_warp.h): the estimate runs on them as on a
+        # reference (moving_view.py): the estimate runs on them as on a
         # fixed camera's.
-        self.moving = frame_cameras is not None
-        if self.moving:
+        if frame_cameras is not None:
             camera = reference_camera(scene, frame_cameras, self.frames, ground_object_ids)
         # Large frames are reduced (WORKING_MAX_WIDTH): `work` is the camera
         # of the frames the evidence and the tracker see.
@@ -578,25 +511,8 @@ class _WholeClip:
         self.factor = factor
         self.work = camera if factor == 1 else camera.resized(camera.width // factor,
                                                               camera.height // factor)
-        self.view: Any = None
-        # The frames' cameras at the working size (None: no pose) and, for
-        # those without a pose, why.
-        self.frame_work: Dict[int, Any] = {}
-        self.why_no_pose: Dict[int, str] = {}
-        self.warped: Any = None  # the pass's WarpedSource
-        self.warp_s = 0.0        # resampling outside the pass
-        if self.moving:
-            try:
-                self.view = native.ViewWarp(scene, self.work)
-            except ValueError:
-                raise EstimateError("the camera sees none of the model on the frame its "
-                                    "moving view is taken from")
-            for f, c in frame_cameras.items():
-                posed = _posed(c)
-                self.frame_work[f] = posed if posed is None or factor == 1 else \
-                    posed.resized(self.work.width, self.work.height)
-                if posed is None:
-                    self.why_no_pose[f] = c or NO_POSE
+        self.view: Optional[MovingView] = None if frame_cameras is None else \
+            MovingView(native, scene, self.work, frame_cameras)
         self.top = -(-ignore_top_rows // factor)
         self.result.tracker_pixel_scale = camera.width / self.work.width
         # Segments the caller knows of: capture times going back.
@@ -646,9 +562,9 @@ class _WholeClip:
         self.release_sky()
         self.doubt_off_circle()
         self.sunlight_against_circle()
-        if self.moving:
-            self.less_sure_where_less_is_seen()
-            self.shadows_in_their_frames()
+        if self.view is not None:
+            self.view.less_sure_where_less_is_seen(self.result.frames, self.done.shadow_view)
+            self.view.shadows_in_their_frames(self.result.frames)
         self.result.timing = self.timing()
         return self.result
 
@@ -672,14 +588,14 @@ class _WholeClip:
         frames of a short run, kept for the pass ({frame: gray}), or None
         when no frame could be read."""
         native, frames = self.native, self.frames
-        wanted_reference = [frames[i] for i in spread(self.n)]
+        wanted_reference = [frames[i] for i in notes.spread(list(range(self.n)), REFERENCE_FRAMES)]
         size = (self.work.width, self.work.height)
         # Reference frames need not be exact: the key frame before each
         # asked is read (one decode after a seek). A moving camera's key
         # frame needs a pose of its own, known when every frame of the run
         # has one (a key frame before the run's first frame has none: that
         # reference frame is left out).
-        near = not self.moving or frames == list(range(frames[0], frames[-1] + 1))
+        near = self.view is None or frames == list(range(frames[0], frames[-1] + 1))
         reference_frames: Iterable[Tuple[int, Gray]] = (
             ((f, self.reduced(self.read_gray(f), f)) for f in wanted_reference)
             if self.stream is None else self.stream(wanted_reference, near, size))
@@ -693,8 +609,8 @@ class _WholeClip:
         budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES or independent else 0
         wanted = set(frames)
         for f, image in reference_frames:
-            if self.moving and self.stream is not None:
-                image = self.from_reference_view(f, image)
+            if self.view is not None and self.stream is not None:
+                image = self.view.from_reference_view(f, image)
             gray = _frame(image)
             reference.append(gray)
             if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
@@ -725,15 +641,8 @@ class _WholeClip:
             index_of = {f: i for i, f in enumerate(rest)}
         else:
             frame_source, index_of = self.source(rest, (self.work.width, self.work.height))
-            if self.moving:
-                size = max(index_of.values(), default=-1) + 1
-                by_index: List[Any] = [None] * size
-                why_not = [""] * size
-                for f, i in index_of.items():
-                    by_index[i] = self.frame_work.get(f)
-                    why_not[i] = self.why_no_pose.get(f, "")
-                frame_source = self.warped = native.WarpedSource(frame_source, self.view,
-                                                                 by_index, why_not)
+            if self.view is not None:
+                frame_source = self.view.source(frame_source, index_of)
         progress = self.progress
         self.done = native.run_clip_pass(
             frame_source, [index_of.get(f, -1) if f not in kept else -1 for f in frames],
@@ -1057,35 +966,6 @@ class _WholeClip:
 
     # -- small helpers -----------------------------------------------------
 
-    def less_sure_where_less_is_seen(self) -> None:
-        """A moving camera's frame that sees only part of where the shadows
-        can fall holds that share of the evidence: its confidence is scaled
-        by it (a frame seeing 73% of it, half the shadows out of view, came
-        out 9 deg off at 0.5)."""
-        seen = np.clip(np.asarray(self.done.shadow_view, dtype=float), 0.0, 1.0)
-        for k, r in enumerate(self.result.frames):
-            r.confidence *= float(seen[k])
-            r.on_circle *= float(seen[k])
-
-    def shadows_in_their_frames(self) -> None:
-        """A moving camera's tracked shadows were found in the reference
-        view: each is carried through the model to its own frame's pixels
-        (at the working size), where the overlay draws it on the footage."""
-        for r in self.result.frames:
-            t: Any = r.tracked
-            camera = self.frame_work.get(r.frame)
-            if t is None:
-                continue
-            ends = np.array([t.shadow_start_px, t.shadow_end_px], dtype=np.float64)
-            moved = np.full((2, 2), np.nan)
-            if camera is not None and np.isfinite(ends).all():
-                points = self.scene.intersect_pixels(self.work, ends)["point"]
-                if np.isfinite(points).all():
-                    moved = camera.project(points.astype(np.float64))[0]
-            r.tracked = FrameShadow((float(moved[0][0]), float(moved[0][1])),
-                                    (float(moved[1][0]), float(moved[1][1])),
-                                    float(t.contrast))
-
     def read_again(self, k: int) -> Optional[np.ndarray]:
         """Frame k at the working size: as the pass kept it (the check was
         likely to want it), else read again."""
@@ -1104,21 +984,7 @@ class _WholeClip:
             return image
         if gray.shape != (self.work.height, self.work.width):
             gray = self.native.resized_gray(gray, self.work.width, self.work.height)
-        return self.from_reference_view(f, gray) if self.moving else gray
-
-    def from_reference_view(self, f: int, image: Gray) -> Gray:
-        """A moving camera's frame f (at the working size) resampled into the
-        reference view, or why it cannot be."""
-        gray = _frame(image)
-        if gray is None:
-            return image
-        camera = self.frame_work.get(f)
-        if camera is None:
-            return self.why_no_pose.get(f, NO_POSE)
-        t0 = time.perf_counter()
-        warped, _, why, _ = self.view.warp(gray, camera)
-        self.warp_s += time.perf_counter() - t0
-        return warped if warped is not None else why
+        return gray if self.view is None else self.view.from_reference_view(f, gray)
 
     def motion_deg(self, k: int, j: int) -> float:
         return motion.sun_motion_bound_deg(k, j, self.times_s, self.path_options)
@@ -1148,8 +1014,7 @@ class _WholeClip:
                 "frames_read": self.frames_read, "frames": n,
                 "total_s": time.perf_counter() - self.t0, **self.sky_sizes,
                 "directions": len(self.directions), "spacing_deg": self.spacing_deg,
-                **({"warp_s": self.warp_s + (self.warped.seconds if self.warped else 0.0)}
-                   if self.moving else {})}
+                **({"warp_s": self.view.seconds()} if self.view is not None else {})}
 
 
 def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_seconds: bool,

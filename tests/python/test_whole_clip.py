@@ -27,7 +27,7 @@ from sunlapse.core import trimmed_circle  # noqa: E402
 from sunlapse.estimate import finish, options as estimate_options  # noqa: E402
 from sunlapse.estimate.raw import RawSun  # noqa: E402
 from sunlapse.core import angles  # noqa: E402
-from sunlapse.estimate import whole_clip  # noqa: E402
+from sunlapse.estimate import moving_view as moving, whole_clip  # noqa: E402
 
 W, H = 320, 200
 
@@ -606,7 +606,7 @@ def test_a_camera_that_pans_away_from_the_casters_and_back(world):
     cameras = {k + 1: view(k) for k in range(n)}
     frames = [draw_from(world, cameras[k + 1], truth[k], k) for k in range(n)]
     scene = world[0]
-    chosen = whole_clip.reference_camera(scene, cameras, list(range(1, n + 1)), [0])
+    chosen = moving.reference_camera(scene, cameras, list(range(1, n + 1)), [0])
     assert chosen is not cameras[n // 2 + 1]
     result = whole_clip.estimate(native, scene, cameras[1], list(range(1, n + 1)),
                                  lambda f: frames[f - 1], [0], frame_cameras=cameras)
@@ -621,7 +621,7 @@ def test_a_camera_that_pans_away_from_the_casters_and_back(world):
     # with the reason, never "no direct sunlight" (which keys the lamp off).
     away = result.frames[n // 2]
     assert away.sunlight == whole_clip.Sunlight.UNKNOWN, away
-    assert away.reason == whole_clip.SHADOWS_OUT_OF_VIEW and not away.shadows_in_view
+    assert away.reason == moving.SHADOWS_OUT_OF_VIEW and not away.shadows_in_view
     assert all(result.frames[k].shadows_in_view for k in near_ends)
     assert not any(r.sunlight == whole_clip.Sunlight.NO for r in result.frames)
 
