@@ -85,6 +85,32 @@ def test_modal_estimate_runs_in_the_background_and_the_overlay_draws(scene, tmp_
     assert yellow.sum() > 10
 
 
+def test_a_moving_camera_is_estimated_in_the_window_and_its_shadow_drawn(tmp_path):
+    """Issue 26 in a real window: a motion-control move keyed per frame (a
+    suite member, tiny), estimated by the modal operator; the overlay draws
+    the tracked shadow in the frame's own pixels, the lamp is keyed, and
+    nothing raises in a redraw."""
+    out = str(tmp_path / "moving")
+    proc = subprocess.run(["blender", "-b", "--factory-startup", "--python-exit-code", "1",
+                           "--python", os.path.join(ROOT, "examples", "generate_scene.py"), "--",
+                           "--random", "moving2", "--out", out, "--frames", "10",
+                           "--resolution", "256x144", "--samples", "8"],
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    shot = str(tmp_path / "shot.png")
+    proc = blender_ui(os.path.join(out, "scene.blend"), "--python",
+                      os.path.join(HERE, "ui_script.py"), "--", "modal", shot)
+    r = results(proc)
+    text = proc.stdout + proc.stderr
+    assert r.get("invoke") == "{'RUNNING_MODAL'}", text[-3000:]
+    assert r.get("stored") == "True" and r.get("apply") == "{'FINISHED'}", text[-3000:]
+    assert r.get("moving") == "True"   # estimated as a moving camera's
+    assert "Traceback" not in text, text[-3000:]
+    img = load_rgb(shot)
+    yellow = (img[..., 0] > 0.9) & (img[..., 1] > 0.8) & (img[..., 2] < 0.3)
+    assert yellow.sum() > 10
+
+
 def test_esc_cancels_and_changes_nothing(scene, tmp_path):
     proc = blender_ui("--enable-event-simulate", fresh_copy(scene, tmp_path), "--python",
                       os.path.join(HERE, "ui_script.py"), "--", "esc", str(tmp_path / "x.png"))

@@ -138,6 +138,7 @@ def poll():
         return 0.5
     result("stored", track is not None)
     if track is not None:
+        result("moving", "moving_camera" in (track.method.get("options") or {}))
         result("apply", bpy.ops.clip.sunlapse_apply_lamp())
         bpy.app.timers.register(shot, first_interval=1.0)
     else:
