@@ -13,7 +13,7 @@ FIGURES.json` prints the table below from a suite run made with
 from __future__ import annotations
 
 import bisect
-from typing import Sequence, Set, Tuple
+from typing import Optional, Sequence, Set, Tuple
 
 # (support, probability within 2 deg) knots, support ascending; a frame
 # between two knots is interpolated linearly, beyond the ends held.
@@ -46,18 +46,27 @@ DOUBTED_MAX_PROBABILITY = 0.49
 MEASURED_SHARE_MIN = 0.85
 
 
-# A segment of fewer frames than this split off the rest of the clip (a cut
-# or a jump of the path) has too little of the Sun's path to confirm it: its
-# frames stay below 0.5. On 84 suite scenes the only such segment was
-# rough7's frames 1-3, 50 deg off at 0.90.
+# A segment with fewer sunlit frames than this split off the rest of the
+# clip (a cut or a jump of the path) has too little of the Sun's path to
+# confirm it: its frames stay below 0.5. On 84 suite scenes the only such
+# segment was rough7's frames 1-3, 50 deg off at 0.90; on fresh members,
+# walls9's frames 1-9, whose 7 dark frames had left 2 sunlit ones 59 deg
+# off at 0.93-0.94 (dark frames show nothing of the path).
 SHORT_SEGMENT_FRAMES = 4
 
 
-def short_segment_frames(segments: Sequence[Sequence[int]]) -> Set[int]:
-    """The frames of the short segments of a clip cut into several."""
+def short_segment_frames(segments: Sequence[Sequence[int]],
+                         sunlit: Optional[Set[int]] = None) -> Set[int]:
+    """The frames of the short segments of a clip cut into several: those
+    with fewer than SHORT_SEGMENT_FRAMES frames in `sunlit` (None: every
+    frame counts)."""
     if len(segments) < 2:
         return set()
-    return {f for segment in segments if len(segment) < SHORT_SEGMENT_FRAMES for f in segment}
+
+    def counted(segment: Sequence[int]) -> int:
+        return len(segment) if sunlit is None else sum(f in sunlit for f in segment)
+    return {f for segment in segments if counted(segment) < SHORT_SEGMENT_FRAMES
+            for f in segment}
 
 
 def clip_doubted(measured_share: float) -> bool:

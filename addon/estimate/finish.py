@@ -137,7 +137,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"could show it ({share:.0%}): the estimate does not explain this clip "
                      f"well, so no frame's confidence reaches 0.5")
 
-    short = calibration.short_segment_frames(segments) if calibrated else set()
+    sunlit = {r.frame for r in raws if r.sunlight == Sunlight.YES}
+    short = calibration.short_segment_frames(segments, sunlit) if calibrated else set()
 
     def reported(support: float, frame: Optional[int] = None) -> float:
         return calibration.probability(support, doubted_clip=doubted,

@@ -162,6 +162,25 @@ def test_frames_looking_away_from_the_shadows_do_not_count_against_the_clip():
     assert share(raws + counted)[1] == calibration.DOUBTED_MAX_PROBABILITY
 
 
+def test_a_segment_of_few_sunlit_frames_is_short_however_many_dark_ones_it_has():
+    """walls9 (a fresh suite member): 7 dark frames and 2 sunlit ones split
+    off the rest by a jump of the path; the 2 were 59 deg off at 0.93. Dark
+    frames show nothing of the Sun's path, so only sunlit frames count."""
+    segments = [list(range(1, 10)), list(range(10, 33))]
+    sunlit = set(range(8, 33))
+    assert calibration.short_segment_frames(segments) == set()
+    assert calibration.short_segment_frames(segments, sunlit) == set(range(1, 10))
+    raws = [RawSun(f, sunlight=trackfile.Sunlight.NO) for f in range(1, 8)] + \
+        [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97, sunlight=trackfile.Sunlight.YES)
+         for f in range(8, 33)]
+    track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                    "smoothing": "two_pass"})
+    finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None, segments)
+    by_frame = {f.frame: f for f in track.frames}
+    assert [by_frame[f].confidence for f in (8, 9)] == [calibration.DOUBTED_MAX_PROBABILITY] * 2
+    assert all(by_frame[f].confidence > 0.9 for f in range(10, 33))
+
+
 def test_a_short_segment_split_off_the_clip_stays_below_one_half():
     assert calibration.short_segment_frames([[1, 2, 3], [4, 5, 6, 7, 8]]) == {1, 2, 3}
     assert calibration.short_segment_frames([[1, 2, 3]]) == set()  # the whole clip
