@@ -13,6 +13,18 @@
 
 namespace sunlapse::python {
 
+namespace {
+// One figure of every frame of a pass as a numpy array of T.
+template <typename T, typename Get>
+py::array_t<T> PerFrame(const ClipPassResult& r, Get get) {
+  py::array_t<T> out(static_cast<py::ssize_t>(r.frames.size()));
+  auto v = out.template mutable_unchecked<1>();
+  for (size_t k = 0; k < r.frames.size(); ++k)
+    v(k) = static_cast<T>(get(r.frames[k]));
+  return out;
+}
+}  // namespace
+
 void BindWholeClip(py::module_& m) {
   OptionsClass<ClipPassOptions>(m, "ClipPassOptions",
                                 "Options of run_clip_pass (clip_pass.h).")
@@ -45,21 +57,16 @@ void BindWholeClip(py::module_& m) {
       .def_property_readonly(
           "status",
           [](const ClipPassResult& r) {
-            py::array_t<int8_t> out(static_cast<py::ssize_t>(r.frames.size()));
-            auto v = out.mutable_unchecked<1>();
-            for (size_t k = 0; k < r.frames.size(); ++k)
-              v(k) = static_cast<int8_t>(r.frames[k].evidence.status);
-            return out;
+            return PerFrame<int8_t>(
+                r, [](const ClipPassFrame& f) { return f.evidence.status; });
           },
           "int8 per frame: its FrameEvidenceStatus value")
       .def_property_readonly(
           "shadow_view",
           [](const ClipPassResult& r) {
-            py::array_t<float> out(static_cast<py::ssize_t>(r.frames.size()));
-            auto v = out.mutable_unchecked<1>();
-            for (size_t k = 0; k < r.frames.size(); ++k)
-              v(k) = static_cast<float>(r.frames[k].evidence.shadow_view);
-            return out;
+            return PerFrame<float>(r, [](const ClipPassFrame& f) {
+              return f.evidence.shadow_view;
+            });
           },
           "float32 per frame: the share of the samples where shadows can show "
           "that the frame sees (below 1 for a moving camera's frame only)")

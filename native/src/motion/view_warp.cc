@@ -102,10 +102,13 @@ ViewWarpResult ViewWarp::Warp(const cv::Mat& frame, const Camera& camera,
   Scratch local_scratch;
   Scratch& sc = scratch != nullptr ? *scratch : local_scratch;
   std::vector<Eigen::Vector2d>& grid = sc.grid;
-  grid.clear();
-  grid.reserve(static_cast<size_t>(gw) * gh);
-  for (int j = 0; j < gh; ++j)
-    for (int i = 0; i < gw; ++i) grid.emplace_back(grid_x(i), grid_y(j));
+  if (sc.grid_size != Eigen::Vector2i(fw, fh)) {  // the same for every frame
+    grid.clear();
+    grid.reserve(static_cast<size_t>(gw) * gh);
+    for (int j = 0; j < gh; ++j)
+      for (int i = 0; i < gw; ++i) grid.emplace_back(grid_x(i), grid_y(j));
+    sc.grid_size = Eigen::Vector2i(fw, fh);
+  }
   std::vector<float>& depth = sc.depth;
   depth.resize(grid.size());
   {
@@ -188,7 +191,11 @@ ViewWarpResult ViewWarp::Warp(const cv::Mat& frame, const Camera& camera,
   for (int i = 0; i < n; ++i)
     if (outline[i]) cast.push_back(i);
   const int64_t k = static_cast<int64_t>(cast.size());
-  std::vector<float> origins(3 * k), directions(3 * k), distance(k);
+  std::vector<float>&origins = sc.origins, &directions = sc.directions,
+  &distance = sc.distance;
+  origins.resize(3 * k);
+  directions.resize(3 * k);
+  distance.resize(k);
   for (int64_t j = 0; j < k; ++j) {
     const Eigen::Vector3f d = m.point[cast[j]] - c;
     for (int a = 0; a < 3; ++a) {

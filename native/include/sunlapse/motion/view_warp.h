@@ -80,11 +80,13 @@ class ViewWarp {
 
   // Work buffers one caller keeps from frame to frame.
   struct Scratch {
-    std::vector<Eigen::Vector2d> grid;
+    std::vector<Eigen::Vector2d> grid;  // for grid_size's frames
+    Eigen::Vector2i grid_size{0, 0};
     std::vector<float> depth;
     std::vector<Eigen::Vector2f> at;
     std::vector<uint8_t> outline;
     std::vector<int> cast;
+    std::vector<float> origins, directions, distance;  // rays near outlines
   };
 
   // Frame (CV_32F gray of `camera`'s size, or empty) taken by `camera` ->
