@@ -13,8 +13,9 @@ least --min-block frames, default 40), as knots to interpolate between,
 fitted on the frames with some support (support 0 stays 0) of the clips it
 applies to. Frames whose support is below calibration.DOUBTED_SUPPORT are
 then held below 0.5, and so is every frame of a clip whose Sun was measured
-on too few of the frames that could show it (calibration.clip_doubted; the
-suite's measured_share, from the track's sun_measured_share).
+on too few of the frames that could show it, or whose model's shadows do not
+fit the footage (calibration.clip_doubted; the suite's measured_share and
+model_misfit, from the track's sun_measured_share and model_misfit).
 
 Printed: the reliability table and expected calibration error (ECE, 10
 bins) of the support as it is; the same of the map applied to scenes it was
@@ -68,7 +69,8 @@ def scenes_from(paths):
                 key = f"{smoothing}:{row['scene']}"
                 scenes.setdefault(key, []).extend(frames)
                 share = row.get("measured_share")
-                doubted[key] = share is not None and calibration.clip_doubted(share)
+                doubted[key] = share is not None and calibration.clip_doubted(
+                    share, row.get("model_misfit"))
     if not scenes:
         fail("no scored frames in " + ", ".join(paths))
     return scenes, doubted
@@ -148,7 +150,8 @@ def main(argv=None):
     held = sorted(n for n in scenes if doubted[n])
     print(f"{len(scenes)} scene runs, {len(every)} scored frames; clips held below 0.5 "
           f"(Sun measured on under {calibration.MEASURED_SHARE_MIN:.0%} of the frames that "
-          f"could show it): {', '.join(held) or 'none'}")
+          f"could show it, or a model misfit of {calibration.MODEL_MISFIT_MAX:g} or more): "
+          f"{', '.join(held) or 'none'}")
     print_table("support as the estimator computes it", every)
     print_table(f"calibrated, judged on scenes held out ({args.folds} folds)",
                 held_out(scenes, doubted, args.folds, args.min_block))

@@ -299,8 +299,10 @@ def score(key, folder, track_path, wall_s, error):
                direction_max=rep.direction and rep.direction.max,
                total_s=timing.get("total_s"), per_frame=per_frame,
                # The share of the frames that could show the Sun on which it
-               # was measured (bench/calibrate.py's clip rule).
-               measured_share=(track.extra or {}).get("sun_measured_share"))
+               # was measured, and the model's misfit (bench/calibrate.py's
+               # clip rules).
+               measured_share=(track.extra or {}).get("sun_measured_share"),
+               model_misfit=(track.extra or {}).get("model_misfit"))
     # Every frame must be estimated: a missing frame fails the scene.
     row["passed"] = bool(rep.frames_estimated == len(up) and rep.zenith and
                          rep.zenith.mean <= PASS_MEAN_DEG and rep.zenith.max <= PASS_MAX_DEG and

@@ -66,6 +66,9 @@ class FrameEstimate:
     reason: Optional[str] = None
     # Sun / ambient light on the ground (from the shadow fit); optional.
     sun_ambient_ratio: Optional[float] = None
+    # Share of the tracked shadows' band the fitted Sun leaves on the wrong
+    # side of its edges (0..1): how well the model's shadows fit; optional.
+    shadow_misfit: Optional[float] = None
     # Capture time (ISO 8601, UTC) when the run was given the frames' times.
     time_utc: Optional[str] = None
     # Direct sunlight on the frame (None: not decided, e.g. the thesis
@@ -231,6 +234,8 @@ def _frame_to_json(f: FrameEstimate) -> Dict[str, Any]:
         d["time_utc"] = str(f.time_utc)
     if f.sun_ambient_ratio is not None:
         d["sun_ambient_ratio"] = float(f.sun_ambient_ratio)
+    if f.shadow_misfit is not None:
+        d["shadow_misfit"] = round(float(f.shadow_misfit), 4)
     if f.sunlight is not None:
         d["sunlight"] = Sunlight(f.sunlight).value
     if f.predicted:
@@ -436,6 +441,7 @@ def _frame_from_json(fd: Any) -> FrameEstimate:
         shadow_start_px=start, shadow_end_px=end,
         reason=_text(fd.get("reason"), "reason"),
         sun_ambient_ratio=_number(fd.get("sun_ambient_ratio"), "sun_ambient_ratio", 0.0),
+        shadow_misfit=_number(fd.get("shadow_misfit"), "shadow_misfit", 0.0, 1.0),
         time_utc=_text(fd.get("time_utc"), "time_utc"),
         sunlight=_sunlight(fd.get("sunlight")),
         predicted=_flag(fd.get("predicted"), "predicted"))

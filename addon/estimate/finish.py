@@ -130,12 +130,29 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     measured = sum(r.has_sun for r in could_show)
     share = measured / len(could_show) if could_show else 1.0
     track.extra["sun_measured_share"] = round(share, 4)
-    doubted = calibrated and calibration.clip_doubted(share)
-    if doubted:
+    misfit = calibration.model_misfit(
+        r.tracked.misfit for r in raws if r.has_sun and r.tracked is not None
+    ) if options.method == "default" else None  # the thesis's tracker measures none
+    if misfit is not None:
+        track.extra["model_misfit"] = round(misfit, 4)
+    doubted = calibrated and calibration.clip_doubted(share, misfit)
+    if calibration.model_doubted(misfit):
+        track.report("model", trackfile.ProblemKind.HINT,
+                     f"the model's shadows miss the footage's: on a typical frame "
+                     f"{misfit:.0%} of the pixels by their edges are lit where the model "
+                     f"shades them or the other way round, whatever the Sun (a true model "
+                     f"leaves under {calibration.MODEL_MISFIT_MAX:.0%}); a caster or the "
+                     f"camera is off in the model, which biases every frame's Sun. Check "
+                     f"the casters' places and sizes against the footage")
+    if doubted and calibration.clip_doubted(share):
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
                      f"the Sun was measured on {measured} of the {len(could_show)} frames that "
                      f"could show it ({share:.0%}): the estimate does not explain this clip "
                      f"well, so no frame's confidence reaches 0.5")
+    elif doubted:
+        track.report("confidence", trackfile.ProblemKind.FELL_BACK,
+                     "the model does not fit the footage (see the model's hint), so no "
+                     "frame's confidence reaches 0.5")
 
     sunlit = {r.frame for r in raws if r.sunlight == Sunlight.YES}
     short = calibration.short_segment_frames(segments, sunlit) if calibrated else set()
@@ -171,6 +188,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
             est.shadow_end_px = [(v + 0.5) * pixel_scale - 0.5 for v in tracked.shadow_end_px]
         if tracked is not None and r.has_sun and 0 < tracked.contrast < 100:
             est.sun_ambient_ratio = tracked.contrast
+            if options.method == "default":  # the thesis's tracker measures none
+                est.shadow_misfit = tracked.misfit
         track.frames.append(est)
 
 

@@ -42,6 +42,7 @@ class FrameShadow:
     shadow_start_px: Tuple[float, float]
     shadow_end_px: Tuple[float, float]
     contrast: float
+    misfit: float
 
 
 def posed(camera: Any) -> Any:
@@ -167,4 +168,4 @@ class MovingView:
                     moved = camera.project(points.astype(np.float64))[0]
             r.tracked = FrameShadow((float(moved[0][0]), float(moved[0][1])),
                                     (float(moved[1][0]), float(moved[1][1])),
-                                    float(t.contrast))
+                                    float(t.contrast), float(t.misfit))

@@ -13,7 +13,7 @@ class RawSun:
     """A frame's raw Sun in the track's terms: zenith and geographic azimuth
     (degrees, clockwise from north as the track's north_offset_deg says), or
     None for both with the reason. tracked: the native TrackedFrame behind
-    it (its shadow's ends and sun/ambient contrast), when the tracker
+    it (its shadow's ends, sun/ambient contrast and misfit), when the tracker
     refined it. sunlight: direct sunlight on the frame, where the method
     decides it (a frame without it has no raw Sun: finish.py predicts one).
     shadows_in_view: False where a moving camera looks away from where the

@@ -192,3 +192,55 @@ def test_a_short_segment_split_off_the_clip_stays_below_one_half():
                   [[1, 2, 3], [4, 5, 6, 7, 8]])
     assert [f.confidence for f in track.frames[:3]] == [calibration.DOUBTED_MAX_PROBABILITY] * 3
     assert all(f.confidence > 0.9 for f in track.frames[3:])
+
+
+class _Tracked:
+    """What finish.py reads of a native TrackedFrame."""
+
+    def __init__(self, misfit):
+        self.misfit = misfit
+        self.contrast = 2.0
+        self.shadow_start_px = self.shadow_end_px = (float("nan"), float("nan"))
+
+
+def _finished_with_misfits(misfits, method="default"):
+    raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97, sunlight=trackfile.Sunlight.YES,
+                   tracked=_Tracked(m)) for f, m in enumerate(misfits, start=1)]
+    track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                    "smoothing": "two_pass"})
+    finish.finish(None, track, raws, estimate_options.EstimateOptions(method=method), None,
+                  None, [[r.frame for r in raws]])
+    return track
+
+
+def test_a_clip_whose_model_does_not_fit_its_footage_stays_below_one_half_and_says_why():
+    """Issue 25 (rough models): a hand-made model's misplaced casters bias
+    every frame alike, and only the shadows' misfit shows it. The clip's
+    median decides, so a few badly fitted frames do not."""
+    limit = calibration.MODEL_MISFIT_MAX
+    assert calibration.model_misfit([None, 0.1, 0.3, 0.2]) == pytest.approx(0.2)
+    assert calibration.model_misfit([None]) is None
+    assert not calibration.model_doubted(None)
+    assert calibration.model_doubted(limit) and not calibration.model_doubted(limit - 0.001)
+    assert calibration.clip_doubted(1.0, limit) and not calibration.clip_doubted(1.0, 0.0)
+
+    fitting = _finished_with_misfits([0.01] * 7 + [0.5] * 3)
+    assert fitting.extra["model_misfit"] == pytest.approx(0.01)
+    assert fitting.problem("model") is None
+    assert all(f.confidence > 0.9 for f in fitting.frames)
+
+    rough = _finished_with_misfits([0.01] * 3 + [limit + 0.05] * 7)
+    assert rough.extra["model_misfit"] == pytest.approx(limit + 0.05)
+    assert all(f.confidence < 0.5 for f in rough.frames)
+    hint = rough.problem("model")
+    assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
+    assert "caster" in hint.message and f"{limit + 0.05:.0%}" in hint.message
+    assert rough.problem("confidence") is not None
+    back = trackfile.from_json(trackfile.to_json(rough))
+    assert back.frames[5].shadow_misfit == pytest.approx(limit + 0.05)
+
+
+def test_the_thesis_method_measures_no_model_misfit():
+    track = _finished_with_misfits([0.5] * 5, method="thesis")
+    assert "model_misfit" not in track.extra and track.problem("model") is None
+    assert all(f.shadow_misfit is None for f in track.frames)

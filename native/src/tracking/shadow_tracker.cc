@@ -434,6 +434,47 @@ struct ShadowTracker::Impl {
     return fit.cost;
   }
 
+  // Share of the band's pixels on the wrong side of a boundary under the
+  // last fit (toward d): the residuals as a mixture of noise about 0 and of
+  // pixels one lit/shaded step off either way (the step: the fit's sun term
+  // times the band's mean n.d), its weights and spread by EM. Texture and
+  // noise widen the middle, a misplaced edge fills the sides.
+  double Misfit(const Eigen::Vector3d& d) const {
+    if (fit.b.empty() || fit.residual.empty() || band_normal.empty())
+      return 0.0;
+    const Eigen::Vector3f df = d.cast<float>();
+    double cos_sum = 0.0;
+    for (const Eigen::Vector3f& n : band_normal)
+      cos_sum += std::max(0.f, n.dot(df));
+    const double step = fit.b[0] * cos_sum / band_normal.size();
+    if (!(step > 0)) return 1.0;
+    double m = 0.1, var = 0.0625 * step * step;
+    const double n = static_cast<double>(fit.residual.size());
+    for (int it = 0; it < 30; ++it) {
+      double sum_side = 0, sum_sq = 0;
+      for (double r : fit.residual) {
+        const double w0 = (1 - m) * std::exp(-0.5 * r * r / var);
+        const double wp =
+            0.5 * m * std::exp(-0.5 * (r - step) * (r - step) / var);
+        const double wm =
+            0.5 * m * std::exp(-0.5 * (r + step) * (r + step) / var);
+        const double total = w0 + wp + wm;
+        if (!(total > 1e-300)) {  // far out either way: a side pixel
+          sum_side += 1;
+          sum_sq += std::min((r - step) * (r - step), (r + step) * (r + step));
+          continue;
+        }
+        sum_side += (wp + wm) / total;
+        sum_sq += (w0 * r * r + wp * (r - step) * (r - step) +
+                   wm * (r + step) * (r + step)) /
+                  total;
+      }
+      m = std::clamp(sum_side / n, 1e-4, 1 - 1e-4);
+      var = std::max(sum_sq / n, 1e-6 * step * step);
+    }
+    return m;
+  }
+
   // Pattern search on the sphere in the tangent plane of `start`: at each
   // step size the four axis neighbours are scored, a parabola through each
   // axis's three costs proposes the minimum between them, and the best of
@@ -804,6 +845,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   out.ok = true;
   out.confidence =
       inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
+  out.misfit = s.Misfit(found);
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;

@@ -72,6 +72,12 @@ struct TrackedFrame {
   double confidence = 0.0;  // 0..1
   double contrast = 0.0;    // fitted sun / ambient on the ground band
   int band_pixels = 0;
+  // Share of the band's pixels the fitted Sun leaves a whole lit/shaded
+  // step off (a mixture of noise and of such pixels, fitted to the
+  // residuals): boundaries the model cannot put where the frame shows them.
+  // A few percent with the true model; a hand-made model's misplaced
+  // casters leave 10-40% whatever the Sun (docs/accuracy.md).
+  double misfit = 0.0;
   int rays = 0;         // shadow rays cast this frame (the tracker's cost)
   int evaluations = 0;  // candidate Suns scored this frame
   // The longest modelled shadow on this frame: caster foot and shadow tip, in
