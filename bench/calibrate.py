@@ -53,7 +53,7 @@ def fail(message):
 def scenes_from(paths):
     """{scene: [(error deg, support)]} over the suite runs' JSON files, and
     {scene: whether calibration.clip_doubted holds it below 0.5}."""
-    scenes, doubted = {}, {}
+    scenes, doubted, model = {}, {}, {}
     for path in paths:
         try:
             with open(path) as fh:
@@ -71,9 +71,10 @@ def scenes_from(paths):
                 share = row.get("measured_share")
                 doubted[key] = share is not None and calibration.clip_doubted(
                     share, row.get("model_misfit"))
+                model[key] = calibration.model_doubted(row.get("model_misfit"))
     if not scenes:
         fail("no scored frames in " + ", ".join(paths))
-    return scenes, doubted
+    return scenes, doubted, model
 
 
 def fit(frames, min_block):
@@ -82,8 +83,22 @@ def fit(frames, min_block):
     return evaluation.isotonic_fit([f for f in frames if f[1] > 0], WITHIN_DEG, min_block)
 
 
-def mapped(frames, knots, doubted=False):
-    return [(e, calibration.probability(c, knots, doubted)) for e, c in frames]
+def mapped(frames, knots, doubted=False, model=False, model_cap=None):
+    """The frames' confidences as the map, the clip rules and (model_cap,
+    when given) a model-doubted clip's cap make them."""
+    cap = calibration.MODEL_DOUBTED_PROBABILITY if model_cap is None else model_cap
+    return [(e, min(cap, c) if model and c > 0 else calibration.probability(c, knots, doubted))
+            for e, c in frames]
+
+
+def model_cap(frames):
+    """The share of frames with support within WITHIN_DEG in clips held by
+    the model rule, below DOUBTED_MAX_PROBABILITY (None: no such frames)."""
+    scored = [e for e, c in frames if c > 0]
+    if not scored:
+        return None
+    within = sum(e <= WITHIN_DEG for e in scored) / len(scored)
+    return min(within, calibration.DOUBTED_MAX_PROBABILITY)
 
 
 def wrong_at_half(frames):
@@ -101,21 +116,23 @@ def print_table(title, frames):
     return ece
 
 
-def held_out(scenes, doubted, folds, min_block):
-    """Every scene's frames mapped by knots fitted without its fold (on the
-    clips the map applies to)."""
+def held_out(scenes, doubted, model, folds, min_block):
+    """Every scene's frames mapped by knots (and a model cap) fitted without
+    its fold (the knots on the clips the map applies to)."""
     names = sorted(scenes)
     out = []
     for k in range(folds):
         knots = fit([f for i, n in enumerate(names) if i % folds != k and not doubted[n]
                      for f in scenes[n]], min_block)
+        cap = model_cap([f for i, n in enumerate(names) if i % folds != k and model[n]
+                         for f in scenes[n]])
         for i, n in enumerate(names):
             if i % folds == k:
-                out += mapped(scenes[n], knots, doubted[n])
+                out += mapped(scenes[n], knots, doubted[n], model[n], cap)
     return out
 
 
-def write_knots(knots):
+def write_knots(knots, cap):
     text = open(TABLE).read()
     body = "".join(f"    ({c:.4f}, {p:.4f}),\n" for c, p in knots)
     new, n = re.subn(rf"{TABLE_NAME}: Tuple\[Tuple\[float, float\], \.\.\.\] = \((?:.|\n)*?\n?\)\n",
@@ -123,9 +140,16 @@ def write_knots(knots):
                      count=1)
     if n != 1:
         fail(f"no {TABLE_NAME} table in {TABLE}")
+    if cap is not None:
+        new, n = re.subn(r"\nMODEL_DOUBTED_PROBABILITY = [0-9.]+\n",
+                         f"\nMODEL_DOUBTED_PROBABILITY = {cap:.4f}\n", new, count=1)
+        if n != 1:
+            fail(f"no MODEL_DOUBTED_PROBABILITY in {TABLE}")
     with open(TABLE, "w") as fh:
         fh.write(new)
-    print(f"\nwrote {len(knots)} knots into {os.path.relpath(TABLE, ROOT)}")
+    print(f"\nwrote {len(knots)} knots"
+          f"{'' if cap is None else f' and MODEL_DOUBTED_PROBABILITY {cap:.4f}'} into "
+          f"{os.path.relpath(TABLE, ROOT)}")
 
 
 def main(argv=None):
@@ -143,7 +167,7 @@ def main(argv=None):
         p.error(f"--min-block must be at least 1, got {args.min_block}")
     if args.folds < 2:
         p.error(f"--folds must be at least 2, got {args.folds}")
-    scenes, doubted = scenes_from(args.suite)
+    scenes, doubted, model = scenes_from(args.suite)
     every = [f for n in sorted(scenes) for f in scenes[n]]
     if len(scenes) < args.folds:
         p.error(f"--folds {args.folds} needs as many scenes; the files hold {len(scenes)}")
@@ -154,16 +178,20 @@ def main(argv=None):
           f"{', '.join(held) or 'none'}")
     print_table("support as the estimator computes it", every)
     print_table(f"calibrated, judged on scenes held out ({args.folds} folds)",
-                held_out(scenes, doubted, args.folds, args.min_block))
+                held_out(scenes, doubted, model, args.folds, args.min_block))
     knots = fit([f for n in sorted(scenes) if not doubted[n] for f in scenes[n]],
                 args.min_block)
+    cap = model_cap([f for n in sorted(scenes) if model[n] for f in scenes[n]])
     print_table("calibrated, fitted and judged on every scene",
-                [f for n in sorted(scenes) for f in mapped(scenes[n], knots, doubted[n])])
+                [f for n in sorted(scenes)
+                 for f in mapped(scenes[n], knots, doubted[n], model[n], cap)])
     print("\nknots (support, probability within 2 deg):")
     for c, prob in knots:
         print(f"  ({c:.4f}, {prob:.4f}),")
+    print("model-doubted clips' cap (their frames' share within 2 deg): "
+          + ("none" if cap is None else f"{cap:.4f}"))
     if args.write:
-        write_knots(knots)
+        write_knots(knots, cap)
     return 0
 
 

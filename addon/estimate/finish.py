@@ -136,6 +136,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     if misfit is not None:
         track.extra["model_misfit"] = round(misfit, 4)
     doubted = calibrated and calibration.clip_doubted(share, misfit)
+    model_doubted = calibrated and calibration.model_doubted(misfit)
     if calibration.model_doubted(misfit):
         track.report("model", trackfile.ProblemKind.HINT,
                      f"the model's shadows miss the footage's: on a typical frame "
@@ -151,15 +152,16 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"well, so no frame's confidence reaches 0.5")
     elif doubted:
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
-                     "the model does not fit the footage (see the model's hint), so no "
-                     "frame's confidence reaches 0.5")
+                     f"the model does not fit the footage (see the model's hint), so no "
+                     f"frame's confidence goes above {calibration.MODEL_DOUBTED_PROBABILITY:.2f} "
+                     f"(the share of such frames within 2 deg on the test scenes)")
 
     sunlit = {r.frame for r in raws if r.sunlight == Sunlight.YES}
     short = calibration.short_segment_frames(segments, sunlit) if calibrated else set()
 
     def reported(support: float, frame: Optional[int] = None) -> float:
-        return calibration.probability(support, doubted_clip=doubted,
-                                       short_segment=frame in short) if calibrated else support
+        return calibration.probability(support, doubted_clip=doubted, short_segment=frame in short,
+                                       model_doubted_clip=model_doubted) if calibrated else support
     if track.initial and track.initial.get("confidence") is not None:
         track.initial["confidence"] = reported(track.initial["confidence"],
                                                track.initial.get("frame"))

@@ -1,7 +1,11 @@
 """Confidence as a probability (issue 25 item 4): the fit that makes it one
 (core.evaluation.isotonic_fit, run by bench/calibrate.py), the map the
 estimate applies (estimate.calibration) and where it applies it."""
+import importlib.util
+import json
+import os
 import random
+import sys
 
 import pytest
 
@@ -231,7 +235,14 @@ def test_a_clip_whose_model_does_not_fit_its_footage_stays_below_one_half_and_sa
 
     rough = _finished_with_misfits([0.01] * 3 + [limit + 0.05] * 7)
     assert rough.extra["model_misfit"] == pytest.approx(limit + 0.05)
-    assert all(f.confidence < 0.5 for f in rough.frames)
+    cap = calibration.MODEL_DOUBTED_PROBABILITY
+    assert 0 < cap < 0.5
+    assert [f.confidence for f in rough.frames] == [pytest.approx(cap)] * 10
+    knots = ((0.1, 0.9), (1.0, 0.95))
+    assert calibration.probability(0.97, knots, model_doubted_clip=True) == pytest.approx(cap)
+    assert calibration.probability(0.1, knots, model_doubted_clip=True) == pytest.approx(
+        min(0.1, cap))
+    assert calibration.probability(0.0, knots, model_doubted_clip=True) == 0.0
     hint = rough.problem("model")
     assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
     assert "caster" in hint.message and f"{limit + 0.05:.0%}" in hint.message
@@ -244,3 +255,41 @@ def test_the_thesis_method_measures_no_model_misfit():
     track = _finished_with_misfits([0.5] * 5, method="thesis")
     assert "model_misfit" not in track.extra and track.problem("model") is None
     assert all(f.shadow_misfit is None for f in track.frames)
+
+
+def _bench_calibrate():
+    """bench/calibrate.py loaded by path; the paths and modules it adds for
+    itself are taken back, so that bench/'s modules shadow nothing here."""
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
+        os.path.abspath(__file__)))), "bench", "calibrate.py")
+    saved_path, saved_modules = list(sys.path), set(sys.modules)
+    try:
+        spec = importlib.util.spec_from_file_location("bench_calibrate", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    finally:
+        sys.path[:] = saved_path
+        for name in set(sys.modules) - saved_modules:
+            del sys.modules[name]
+    return module
+
+
+def test_calibrate_caps_model_doubted_clips_at_their_share_within_2_deg(tmp_path):
+    """bench/calibrate.py: the clips the model rule holds get, at most, the
+    share of their frames that was within 2 deg, and never 0.5."""
+    calibrate = _bench_calibrate()
+    rows = [{"scene": "fits", "measured_share": 1.0, "model_misfit": 0.01,
+             "per_frame": [{"error_deg": 0.5, "confidence": 0.9}] * 4},
+            {"scene": "rough", "measured_share": 1.0,
+             "model_misfit": calibration.MODEL_MISFIT_MAX,
+             "per_frame": [{"error_deg": 1.0, "confidence": 0.9}] +
+             [{"error_deg": 4.0, "confidence": 0.9}] * 3}]
+    path = tmp_path / "suite.json"
+    path.write_text(json.dumps({"smoothings": {"two_pass": {"scenes": rows}}}))
+    scenes, doubted, model = calibrate.scenes_from([str(path)])
+    assert model == {"two_pass:fits": False, "two_pass:rough": True}
+    assert doubted["two_pass:rough"] and not doubted["two_pass:fits"]
+    assert calibrate.model_cap(scenes["two_pass:rough"]) == pytest.approx(0.25)
+    assert calibrate.model_cap([(0.1, 0.9)] * 3) == calibration.DOUBTED_MAX_PROBABILITY
+    assert calibrate.mapped(scenes["two_pass:rough"], ((0.1, 0.9),), True, True, 0.25) == \
+        [(1.0, 0.25)] + [(4.0, 0.25)] * 3

@@ -98,6 +98,7 @@ struct ShadowTracker::Impl {
   std::vector<float> band_origin, band_x, band_y;
   size_t band_picked = 0;  // band pixels LoadBand looked at (seen or not)
   std::vector<Eigen::Vector3f> band_normal;
+  std::vector<int> band_ground;  // per loaded band pixel: its ground index
   std::vector<uint8_t> occluded;
   std::vector<float> lit_origin;  // LitOf's scratch
   AffineFit fit;
@@ -379,6 +380,7 @@ struct ShadowTracker::Impl {
     const int k = o.subsamples;
     band_origin.clear();
     band_normal.clear();
+    band_ground.clear();
     band_y.clear();
     // The pixels' records and frame values are scattered cache misses:
     // fetched a few pixels ahead, the misses overlap.
@@ -408,6 +410,7 @@ struct ShadowTracker::Impl {
         }
       }
       band_normal.push_back(gp.normal);
+      band_ground.push_back(picked[i]);
       band_y.push_back(o.normalize_albedo ? v / gp.albedo : v);
     }
     band_x.resize(band_y.size());
@@ -438,10 +441,33 @@ struct ShadowTracker::Impl {
   // last fit (toward d): the residuals as a mixture of noise about 0 and of
   // pixels one lit/shaded step off either way (the step: the fit's sun term
   // times the band's mean n.d), its weights and spread by EM. Texture and
-  // noise widen the middle, a misplaced edge fills the sides.
-  double Misfit(const Eigen::Vector3d& d) const {
+  // noise widen the middle, a misplaced edge fills the sides. Each pixel is
+  // the median of its 3x3 neighbourhood (albedo taken out): a misplaced
+  // edge leaves strips a few pixels wide, a render's or a sensor's speckle
+  // (a bright pixel in the shade) single pixels, which it drops.
+  double Misfit(const cv::Mat& frame, const Eigen::Vector3d& d) const {
     if (fit.b.empty() || fit.residual.empty() || band_normal.empty())
       return 0.0;
+    std::vector<double> residual(fit.residual.size());
+    float around[9];
+    for (size_t i = 0; i < residual.size(); ++i) {
+      const GroundPixel& gp = ground[band_ground[i]];
+      const float y = band_y[i];  // the fit's value is y - residual
+      int k = 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const cv::Point q(gp.px.x + dx, gp.px.y + dy);
+          if (q.x < 0 || q.y < 0 || q.x >= W || q.y >= H) continue;
+          const int g = ground_index(q);
+          if (g < 0) continue;
+          const float v = frame.at<float>(q);
+          if (std::isnan(v)) continue;
+          around[k++] = o.normalize_albedo ? v / ground[g].albedo : v;
+        }
+      }
+      std::nth_element(around, around + k / 2, around + k);
+      residual[i] = fit.residual[i] + (k > 0 ? around[k / 2] - y : 0.0);
+    }
     const Eigen::Vector3f df = d.cast<float>();
     double cos_sum = 0.0;
     for (const Eigen::Vector3f& n : band_normal)
@@ -449,10 +475,10 @@ struct ShadowTracker::Impl {
     const double step = fit.b[0] * cos_sum / band_normal.size();
     if (!(step > 0)) return 1.0;
     double m = 0.1, var = 0.0625 * step * step;
-    const double n = static_cast<double>(fit.residual.size());
+    const double n = static_cast<double>(residual.size());
     for (int it = 0; it < 30; ++it) {
       double sum_side = 0, sum_sq = 0;
-      for (double r : fit.residual) {
+      for (double r : residual) {
         const double w0 = (1 - m) * std::exp(-0.5 * r * r / var);
         const double wp =
             0.5 * m * std::exp(-0.5 * (r - step) * (r - step) / var);
@@ -845,7 +871,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   out.ok = true;
   out.confidence =
       inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
-  out.misfit = s.Misfit(found);
+  out.misfit = s.Misfit(frame, found);
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;
