@@ -495,8 +495,13 @@ struct ShadowTracker::Impl {
                    wm * (r + step) * (r + step)) /
                   total;
       }
+      const double m_before = m, var_before = var;
       m = std::clamp(sum_side / n, 1e-4, 1 - 1e-4);
       var = std::max(sum_sq / n, 1e-6 * step * step);
+      // Settled: further steps move the share by less than it is reported to.
+      if (std::abs(m - m_before) < 1e-5 &&
+          std::abs(var - var_before) < 1e-4 * var)
+        break;
     }
     return m;
   }
