@@ -84,11 +84,11 @@ def fit(frames, min_block):
 
 
 def mapped(frames, knots, doubted=False, model=False, model_cap=None):
-    """The frames' confidences as the map, the clip rules and (model_cap,
-    when given) a model-doubted clip's cap make them."""
+    """The frames' confidences as calibration.probability makes them with
+    these knots and (when given) this model-doubted clip's cap."""
     cap = calibration.MODEL_DOUBTED_PROBABILITY if model_cap is None else model_cap
-    return [(e, min(cap, c) if model and c > 0 else calibration.probability(c, knots, doubted))
-            for e, c in frames]
+    return [(e, calibration.probability(c, knots, doubted, model_doubted_clip=model,
+                                        model_cap=cap)) for e, c in frames]
 
 
 def model_cap(frames):

@@ -114,17 +114,18 @@ def clip_doubted(measured_share: float, misfit: Optional[float] = None) -> bool:
 def probability(support: float,
                 knots: Sequence[Tuple[float, float]] = SUPPORT_TO_PROBABILITY,
                 doubted_clip: bool = False, short_segment: bool = False,
-                model_doubted_clip: bool = False) -> float:
+                model_doubted_clip: bool = False,
+                model_cap: float = MODEL_DOUBTED_PROBABILITY) -> float:
     """The calibrated confidence of a frame whose support is `support`
     (0 stays 0: a frame without evidence of its own is never likely); in a
     doubted clip (clip_doubted) the support itself, below 0.5, and in a clip
-    whose model does not fit (model_doubted) at most
-    MODEL_DOUBTED_PROBABILITY; below 0.5 too on a doubted frame and in a
-    short segment (short_segment_frames)."""
+    whose model does not fit (model_doubted) at most model_cap (below 0.5
+    whatever it is); below 0.5 too on a doubted frame and in a short segment
+    (short_segment_frames)."""
     if support <= 0.0 or not knots:
         return max(0.0, support)
     if model_doubted_clip:
-        return min(support, MODEL_DOUBTED_PROBABILITY, DOUBTED_MAX_PROBABILITY)
+        return min(support, model_cap, DOUBTED_MAX_PROBABILITY)
     if doubted_clip:
         return min(support, DOUBTED_MAX_PROBABILITY)
     value = _interpolated(support, knots)

@@ -135,9 +135,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     ) if options.method == "default" else None  # the thesis's tracker measures none
     if misfit is not None:
         track.extra["model_misfit"] = round(misfit, 4)
-    doubted = calibrated and calibration.clip_doubted(share, misfit)
-    model_doubted = calibrated and calibration.model_doubted(misfit)
-    if calibration.model_doubted(misfit):
+    model_off = calibration.model_doubted(misfit)
+    if model_off:
         track.report("model", trackfile.ProblemKind.HINT,
                      f"the model's shadows miss the footage's: on a typical frame "
                      f"{misfit:.0%} of the pixels by their edges are lit where the model "
@@ -145,12 +144,15 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"leaves under {calibration.MODEL_MISFIT_MAX:.0%}); a caster or the "
                      f"camera is off in the model, which biases every frame's Sun. Check "
                      f"the casters' places and sizes against the footage")
-    if doubted and calibration.clip_doubted(share):
+    seldom_measured = calibrated and calibration.clip_doubted(share)
+    model_doubted = calibrated and model_off
+    doubted = seldom_measured or model_doubted
+    if seldom_measured:
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
                      f"the Sun was measured on {measured} of the {len(could_show)} frames that "
                      f"could show it ({share:.0%}): the estimate does not explain this clip "
                      f"well, so no frame's confidence reaches 0.5")
-    elif doubted:
+    elif model_doubted:
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
                      f"the model does not fit the footage (see the model's hint), so no "
                      f"frame's confidence goes above {calibration.MODEL_DOUBTED_PROBABILITY:.2f} "

@@ -53,3 +53,11 @@ def generate_preset(preset, tmp_path_factory, *extra):
 @pytest.fixture(scope="session")
 def tiny_plaza(tmp_path_factory):
     return generate_preset("plaza", tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def long_plaza(tmp_path_factory):
+    # Five small frames 40 minutes apart: the shadows move between them, so
+    # their median is the ground without shadows.
+    return generate_preset("plaza", tmp_path_factory, "--frames", "5", "--minutes-per-frame", "40",
+                           "--resolution", "256x192")

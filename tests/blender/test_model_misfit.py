@@ -7,19 +7,11 @@ import json
 import os
 
 import bpy
-import pytest
 
-from conftest import generate_preset, sunlapse
+from conftest import sunlapse
 from test_addon import run_estimate
 
 from sunlapse.estimate import calibration  # noqa: E402 (conftest loads the add-on)
-
-
-@pytest.fixture(scope="module")
-def plaza(tmp_path_factory):
-    # The same render as test_unmodelled_shadows' (made once a session).
-    return generate_preset("plaza", tmp_path_factory, "--frames", "5", "--minutes-per-frame", "40",
-                           "--resolution", "256x192")
 
 
 def roughened(blend, out):
@@ -45,8 +37,8 @@ def roughened(blend, out):
     return moved
 
 
-def test_a_model_whose_casters_are_off_is_told_and_its_confidence_capped(plaza, tmp_path):
-    out, _ = plaza
+def test_a_model_whose_casters_are_off_is_told_and_its_confidence_capped(long_plaza, tmp_path):
+    out, _ = long_plaza
     blend = os.path.join(out, "scene.blend")
     true_path, rough_path = str(tmp_path / "true.sun.json"), str(tmp_path / "rough.sun.json")
     proc = run_estimate(blend, true_path)

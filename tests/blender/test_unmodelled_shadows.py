@@ -6,18 +6,8 @@ import os
 
 import bpy
 import numpy as np
-import pytest
 
-from conftest import generate_preset
 from test_addon import run_estimate
-
-
-@pytest.fixture(scope="session")
-def long_plaza(tmp_path_factory):
-    # Five small frames 40 minutes apart: the shadows move between them, so
-    # their median is the ground without shadows.
-    return generate_preset("plaza", tmp_path_factory, "--frames", "5", "--minutes-per-frame", "40",
-                           "--resolution", "256x192")
 
 
 def truth_mask(out, truth, frame):

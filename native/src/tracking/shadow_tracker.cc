@@ -448,6 +448,12 @@ struct ShadowTracker::Impl {
   double Misfit(const cv::Mat& frame, const Eigen::Vector3d& d) const {
     if (fit.b.empty() || fit.residual.empty() || band_normal.empty())
       return 0.0;
+    const Eigen::Vector3f df = d.cast<float>();
+    double cos_sum = 0.0;
+    for (const Eigen::Vector3f& n : band_normal)
+      cos_sum += std::max(0.f, n.dot(df));
+    const double step = fit.b[0] * cos_sum / band_normal.size();
+    if (!(step > 0)) return 1.0;
     std::vector<double> residual(fit.residual.size());
     float around[9];
     for (size_t i = 0; i < residual.size(); ++i) {
@@ -468,12 +474,6 @@ struct ShadowTracker::Impl {
       std::nth_element(around, around + k / 2, around + k);
       residual[i] = fit.residual[i] + (k > 0 ? around[k / 2] - y : 0.0);
     }
-    const Eigen::Vector3f df = d.cast<float>();
-    double cos_sum = 0.0;
-    for (const Eigen::Vector3f& n : band_normal)
-      cos_sum += std::max(0.f, n.dot(df));
-    const double step = fit.b[0] * cos_sum / band_normal.size();
-    if (!(step > 0)) return 1.0;
     double m = 0.1, var = 0.0625 * step * step;
     const double n = static_cast<double>(residual.size());
     for (int it = 0; it < 30; ++it) {
