@@ -300,22 +300,63 @@ void Scene::IntersectPixels(const Camera& camera, int64_t n,
   Require(n >= 0, "n must be >= 0");
   const Impl& s = *impl_;
   const Eigen::Vector3f center = camera.center_in_world().cast<float>();
+  // Neighbouring pixels' rays share an origin and nearly a direction:
+  // packets of 16 traverse the BVH together (the tracker's ground map, a
+  // ray per pixel of the frame, took 0.14 s at 1080p with single rays).
+  constexpr int kPacket = 16;
   tbb::parallel_for(
-      tbb::blocked_range<int64_t>(0, n, kGrain),
+      tbb::blocked_range<int64_t>(0, (n + kPacket - 1) / kPacket,
+                                  kGrain / kPacket),
       [&](const tbb::blocked_range<int64_t>& r) {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        for (int64_t i = r.begin(); i < r.end(); ++i) {
-          const Eigen::Vector2d px(pixels[2 * i], pixels[2 * i + 1]);
-          if (!px.allFinite()) {
-            WriteMiss(i, out);
-            continue;
+        alignas(64) RTCRayHit16 packet;
+        alignas(64) int valid[kPacket];
+        for (int64_t p = r.begin(); p < r.end(); ++p) {
+          const int64_t base = p * kPacket;
+          for (int k = 0; k < kPacket; ++k) {
+            const int64_t i = base + k;
+            const Eigen::Vector2d px =
+                i < n ? Eigen::Vector2d(pixels[2 * i], pixels[2 * i + 1])
+                      : Eigen::Vector2d(kNaN, kNaN);
+            valid[k] = px.allFinite() ? -1 : 0;
+            const Eigen::Vector3f d =
+                valid[k] ? camera.PixelToRayInWorld(px).cast<float>()
+                         : Eigen::Vector3f(0.f, 0.f, 1.f);
+            packet.ray.org_x[k] = center.x();
+            packet.ray.org_y[k] = center.y();
+            packet.ray.org_z[k] = center.z();
+            packet.ray.dir_x[k] = d.x();
+            packet.ray.dir_y[k] = d.y();
+            packet.ray.dir_z[k] = d.z();
+            packet.ray.tnear[k] = 0.f;
+            packet.ray.tfar[k] = kInf;
+            packet.ray.time[k] = 0.f;
+            packet.ray.mask[k] = 0xFFFFFFFFu;
+            packet.ray.id[k] = 0;
+            packet.ray.flags[k] = 0;
+            packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
           }
-          const Eigen::Vector3f d = camera.PixelToRayInWorld(px).cast<float>();
-          RTCRayHit rh = MakeRayHit(center.data(), d.data(), 0.f, kInf);
-          rtcIntersect1(s.scene, &ctx, &rh);
-          s.WriteHit(i, rh, 1.f, out);
+          rtcIntersect16(valid, s.scene, &ctx, &packet);
+          for (int k = 0; k < kPacket && base + k < n; ++k) {
+            const int64_t i = base + k;
+            if (!valid[k]) {
+              WriteMiss(i, out);
+              continue;
+            }
+            const float o[3] = {center.x(), center.y(), center.z()};
+            const float d[3] = {packet.ray.dir_x[k], packet.ray.dir_y[k],
+                                packet.ray.dir_z[k]};
+            RTCRayHit rh = MakeRayHit(o, d, 0.f, packet.ray.tfar[k]);
+            rh.hit.Ng_x = packet.hit.Ng_x[k];
+            rh.hit.Ng_y = packet.hit.Ng_y[k];
+            rh.hit.Ng_z = packet.hit.Ng_z[k];
+            rh.hit.primID = packet.hit.primID[k];
+            rh.hit.geomID = packet.hit.geomID[k];
+            s.WriteHit(i, rh, 1.f, out);
+          }
         }
       });
 }

@@ -88,6 +88,56 @@ TEST(Scene, CameraPixelsHitWhatTheyProjectFrom) {
   EXPECT_NEAR((hits.point(1).cast<double>() - ground).norm(), 0, 1e-4);
 }
 
+// Pixels go through the BVH 16 at a time: every pixel of a batch whose
+// size is no multiple of 16 (the box, the ground, the sky beyond it and a
+// NaN pixel among them) hits what its own ray from the camera hits.
+TEST(Scene, CameraPixelsInPacketsHitWhatSingleRaysHit) {
+  const Scene scene = BoxOnPlane();
+  BlenderCameraParams p;
+  p.width = 320;
+  p.height = 240;
+  const Eigen::Vector3d eye(0, -12, 8);
+  const Eigen::Vector3d back = eye.normalized();
+  const Eigen::Vector3d right =
+      Eigen::Vector3d::UnitZ().cross(back).normalized();
+  p.world_from_camera_local.block<3, 1>(0, 0) = right;
+  p.world_from_camera_local.block<3, 1>(0, 1) = back.cross(right);
+  p.world_from_camera_local.block<3, 1>(0, 2) = back;
+  p.world_from_camera_local.block<3, 1>(0, 3) = eye;
+  const Camera cam = Camera::FromBlender(p);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Eigen::Vector2d> px;
+  for (int i = 0; i < 37; ++i) px.emplace_back(320 * u(rng), 240 * u(rng));
+  px[5] = Eigen::Vector2d(NAN, 3);
+  const Hits packed = scene.IntersectPixels(cam, px);
+  const Eigen::Vector3f o = cam.center_in_world().cast<float>();
+  int boxes = 0, grounds = 0, misses = 0;
+  for (size_t i = 0; i < px.size(); ++i) {
+    if (i == 5) {
+      EXPECT_FALSE(packed.hit(i));
+      continue;
+    }
+    const Eigen::Vector3f d = cam.PixelToRayInWorld(px[i]).cast<float>();
+    Hits one(1);
+    scene.Intersect(1, o.data(), d.data(), 0.f, INFINITY, one.buffers());
+    ASSERT_EQ(packed.object_id[i], one.object_id[0]) << "pixel " << i;
+    if (!one.hit(0)) {
+      ++misses;
+      EXPECT_TRUE(std::isinf(packed.distance[i]));
+      continue;
+    }
+    ++(one.object_id[0] == 1 ? boxes : grounds);
+    EXPECT_EQ(packed.triangle_id[i], one.triangle_id[0]);
+    EXPECT_NEAR((packed.point(i) - one.point(0)).norm(), 0, 1e-4);
+    EXPECT_NEAR((packed.normal(i) - one.normal(0)).norm(), 0, 1e-5);
+    EXPECT_NEAR(packed.distance[i], one.distance[0], 1e-4);
+  }
+  EXPECT_GT(boxes, 0);
+  EXPECT_GT(grounds, 0);
+  EXPECT_GT(misses, 0);
+}
+
 TEST(Scene, OcclusionTowardTheSunSeesTheBoxShadow) {
   const Scene scene = BoxOnPlane();
   // Ground points east and west of the box, Sun low in the west (from -X).
