@@ -76,6 +76,7 @@ import datetime as dt
 import hashlib
 import json
 import os
+import statistics
 import shutil
 import subprocess
 import sys
@@ -302,7 +303,8 @@ def score(key, folder, track_path, wall_s, error):
                # was measured, and the model's misfit (bench/calibrate.py's
                # clip rules).
                measured_share=(track.extra or {}).get("sun_measured_share"),
-               model_misfit=(track.extra or {}).get("model_misfit"))
+               model_misfit=(track.extra or {}).get("model_misfit"),
+               zenith_bias=zenith_bias(rep))
     # Every frame must be estimated: a missing frame fails the scene.
     row["passed"] = bool(rep.frames_estimated == len(up) and rep.zenith and
                          rep.zenith.mean <= PASS_MEAN_DEG and rep.zenith.max <= PASS_MAX_DEG and
@@ -334,6 +336,15 @@ def print_rows(rows, smoothing):
               + (f"ERROR {r['error']}" if r.get("error") else r["description"]))
 
 
+def zenith_bias(report):
+    """The scene's estimated zenith minus the truth's, averaged over its
+    judged frames (deg; positive: the Sun estimated too low), or None. A
+    suite whose scenes are mostly off the same way has a bias no scene's
+    |error| shows (docs/accuracy.md, "The surface offset's bias")."""
+    off = [e_z - t_z for _, t_z, _, e_z, _ in report.series if e_z is not None]
+    return sum(off) / len(off) if off else None
+
+
 def summary(rows):
     frames = [p for r in rows for p in r.get("per_frame", [])]
     confident = [p for p in frames if p["confidence"] is not None and
@@ -346,6 +357,7 @@ def summary(rows):
     scored = [(p["error_deg"], p["confidence"]) for p in frames
               if p["error_deg"] is not None and p["confidence"] is not None]
     bins, ece = evaluation.reliability(scored, CONFIDENT_WITHIN_DEG)
+    biases = [r["zenith_bias"] for r in rows if r.get("zenith_bias") is not None]
     return {
         "scenes": len(rows),
         "passed": sum(r["passed"] for r in rows),
@@ -372,6 +384,7 @@ def summary(rows):
         "total_s_max": max(times) if times else None,
         "total_s_sum": sum(times) if times else None,
         "failed_runs": [r["scene"] for r in rows if r.get("error")],
+        "zenith_bias_median": statistics.median(biases) if biases else None,
     }
 
 
@@ -406,6 +419,9 @@ def print_summary(s, smoothing):
              f"without direct sunlight, their Sun {_f(s['overcast_error_mean_deg'], 0)} deg off "
              f"on average, {_f(s['overcast_error_max_deg'], 0)} at most"
              if s.get("overcast_frames") else "")
+          + (f"; zenith bias (estimate - truth, median of the scenes' means) "
+             f"{s['zenith_bias_median']:+.2f} deg" if s.get("zenith_bias_median") is not None
+             else "")
           + (f"; runs failed: {', '.join(s['failed_runs'])}" if s["failed_runs"] else ""))
 
 

@@ -195,3 +195,27 @@ def test_moving_members_from_25_on_pan_away_from_the_casters_and_back():
     assert pans[0] == 0.0 and abs(pans[-1]) < 1e-9  # the drawn view at either end
     assert max(map(abs, pans)) > 0.95 * abs(m["pan_deg"])  # looking away mid-clip
     assert "away" not in random_scene.draw("moving24", SP)["camera_motion"]
+
+
+def test_the_score_reports_a_zenith_bias_that_no_error_magnitude_shows(tmp_path):
+    """bench/suite.py: a track whose Sun is 0.5 deg too low on every judged
+    frame (and 0.3 too high on one) has that signed mean in its row, and the
+    summary the median of the scenes'; the frame below 4 deg up is not
+    judged."""
+    trackfile = suite.trackfile
+    zeniths = [40.0, 50.0, 60.0, 88.0]
+    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=z,
+                                                            azimuth_deg=120.0)
+                                    for i, z in enumerate(zeniths)])
+    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+    offsets = [0.5, 0.5, -0.3, 5.0]
+    estimate = trackfile.Track(frames=[trackfile.FrameEstimate(
+        frame=i + 1, zenith_deg=z + o, azimuth_deg=120.0, confidence=0.9)
+        for i, (z, o) in enumerate(zip(zeniths, offsets))])
+    trackfile.write_track(str(tmp_path / "est.sun.json"), estimate)
+    row = suite.score("x", str(tmp_path), str(tmp_path / "est.sun.json"), 1.0, None)
+    assert row["zenith_bias"] == pytest.approx((0.5 + 0.5 - 0.3) / 3)
+    other = dict(row, zenith_bias=-1.0)
+    third = dict(row, zenith_bias=0.9)
+    assert suite.summary([row, other, third])["zenith_bias_median"] == \
+        pytest.approx(row["zenith_bias"])

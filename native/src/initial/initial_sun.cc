@@ -50,8 +50,7 @@ Samples GatherSamples(const Scene& scene, const Camera& camera,
   Hits hits(n);
   scene.IntersectPixels(camera, n, px.data(), hits.buffers());
 
-  const Eigen::AlignedBox3f b = scene.bounds();
-  const float offset = 2e-4f * b.diagonal().norm() + 1e-4f;
+  const float offset = scene.surface_offset();
   const Eigen::Vector3f eye = camera.center_in_world().cast<float>();
   Samples s;
   std::vector<int> group_of_object;

@@ -192,7 +192,7 @@ struct SkyEvidence::Impl {
         1, static_cast<int>(std::floor(std::sqrt(area / o.max_samples))));
     cast(stride, &px, &hits);
 
-    const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
+    const float lift = scene.surface_offset();
     std::vector<Eigen::Vector3f> origin, normal;
     std::map<std::tuple<int, int, int, int>, int> groups;
     const int gw = (W - stride / 2 + stride - 1) / stride;

@@ -116,7 +116,7 @@ struct ShadowTracker::Impl {
   void MapGround() {
     ground_index = cv::Mat1i(H, W, -1);
     const int y0 = o.ignore_top_rows, y1 = H - o.ignore_bottom_rows;
-    const float lift = 2e-4f * scene.bounds().diagonal().norm() + 1e-4f;
+    const float lift = scene.surface_offset();
     ground.reserve(static_cast<size_t>(std::max(0, y1 - y0)) * W);
     // A few rows at a time: the rays' buffers stay small and warm.
     constexpr int kRows = 16;
