@@ -132,14 +132,17 @@ CIRCLE_INLIER_FLOOR_DEG = 1.5
 # shadows at all was 50x the evidence threshold). The tracker's fit says
 # it: the Sun's shadows, sharp where the Sun puts them, with the
 # sun/ambient contrast across their edges at least SUNLIT_MIN_CONTRAST (on
-# the suite 1017 of 1024 frames refine at >= 1; at dusk it fits 0.6-1.0 on
-# frames whose Sun has just set); a frame it could not confirm, by how much
-# of it the sky's evidence explains (SUNLIT_EXPLAINED_SHARE). A Sun below the horizon, the frame's
-# own or its segment's circle's, lights no ground, whatever the frame shows
-# (a grazing Sun's fitted contrast means nothing: the tracker fitted 5-9 on
-# suite frames whose Sun had set by 0.3 deg). A readable frame without
+# the static suite 1880 of 1933 frames with the Sun 4 deg up or more fit
+# 1.3 or more; the shade at the casters' feet fits 1.1-1.2 on night frames,
+# once the shadow rays start 3 mm off the ground, not 4.5 cm: docs/
+# accuracy.md "The surface offset's bias"); a frame it could not confirm,
+# by how much of it the sky's evidence explains (SUNLIT_EXPLAINED_SHARE).
+# A Sun below the horizon, the frame's own or its segment's circle's,
+# lights no ground, whatever the frame shows (a grazing Sun's fitted
+# contrast means nothing: the tracker fitted 5-9 on suite frames whose Sun
+# had set by 0.3 deg). A readable frame without
 # sunlight, in a segment whose other frames show it, says NO; else UNKNOWN.
-SUNLIT_MIN_CONTRAST = 1.0
+SUNLIT_MIN_CONTRAST = 1.3
 # A frame with evidence of its own that the tracker could not confirm (a
 # ground the tracker cannot use: a bollard named as the ground left 8 of the
 # plaza's 32 sunny frames unconfirmed) is in sunlight while its best

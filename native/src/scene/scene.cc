@@ -259,7 +259,7 @@ int64_t Scene::num_vertices() const { return impl_->num_vertices; }
 Eigen::AlignedBox3f Scene::bounds() const { return impl_->bounds; }
 
 float Scene::surface_offset() const {
-  return 2e-4f * impl_->bounds.diagonal().norm() + 1e-4f;
+  return 1e-3f + 1e-5f * impl_->bounds.diagonal().norm();
 }
 int32_t Scene::object_id_of_triangle(int64_t t) const {
   return impl_->object_ids.at(t);

@@ -138,6 +138,40 @@ TEST(Scene, CameraPixelsInPacketsHitWhatSingleRaysHit) {
   EXPECT_GT(misses, 0);
 }
 
+// A pole's shadow on a wide ground ends where geometry puts it: rays
+// leaving the ground start surface_offset() above it, and that must not
+// shorten the shadow (2e-4 of this model's diagonal, 4.5 cm, lit the last
+// 4.5 cm of it and biased every Sun found from shadows 0.45 deg low).
+TEST(Scene, APolesShadowOnAWideGroundEndsWhereGeometryPutsIt) {
+  std::vector<Eigen::Vector3f> v = {
+      {-80, -80, 0}, {80, -80, 0}, {80, 80, 0}, {-80, 80, 0}};
+  std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
+  std::vector<int32_t> ids = {0, 0};
+  const int b = static_cast<int>(v.size());
+  for (int i = 0; i < 8; ++i) {
+    v.emplace_back((i & 1) ? 0.1f : -0.1f, (i & 2) ? 0.1f : -0.1f,
+                   (i & 4) ? 2.5f : 0.f);
+  }
+  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    t.emplace_back(b + q[0], b + q[1], b + q[2]);
+    t.emplace_back(b + q[0], b + q[2], b + q[3]);
+    ids.push_back(1);
+    ids.push_back(1);
+  }
+  const Scene scene(v, t, ids);
+  EXPECT_GT(scene.surface_offset(), 1e-4f);  // above float32's error here
+  // The Sun 45 deg up in the west: the tip falls at x = 0.1 + 2.5.
+  const Eigen::Vector3f to_sun = Eigen::Vector3f(-1, 0, 1).normalized();
+  const float lift = scene.surface_offset();
+  const float origins[] = {2.57f, 0, lift, 2.63f, 0, lift};
+  uint8_t occluded[2];
+  scene.OccludedToward(2, origins, to_sun, 0.f, INFINITY, occluded);
+  EXPECT_EQ(occluded[0], 1) << "3 cm inside the tip";
+  EXPECT_EQ(occluded[1], 0) << "3 cm beyond it";
+}
+
 TEST(Scene, OcclusionTowardTheSunSeesTheBoxShadow) {
   const Scene scene = BoxOnPlane();
   // Ground points east and west of the box, Sun low in the west (from -X).
