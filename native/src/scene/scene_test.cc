@@ -1,5 +1,7 @@
 #include "sunlapse/scene/scene.h"
 
+#include "synthetic.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -93,18 +95,7 @@ TEST(Scene, CameraPixelsHitWhatTheyProjectFrom) {
 // NaN pixel among them) hits what its own ray from the camera hits.
 TEST(Scene, CameraPixelsInPacketsHitWhatSingleRaysHit) {
   const Scene scene = BoxOnPlane();
-  BlenderCameraParams p;
-  p.width = 320;
-  p.height = 240;
-  const Eigen::Vector3d eye(0, -12, 8);
-  const Eigen::Vector3d back = eye.normalized();
-  const Eigen::Vector3d right =
-      Eigen::Vector3d::UnitZ().cross(back).normalized();
-  p.world_from_camera_local.block<3, 1>(0, 0) = right;
-  p.world_from_camera_local.block<3, 1>(0, 1) = back.cross(right);
-  p.world_from_camera_local.block<3, 1>(0, 2) = back;
-  p.world_from_camera_local.block<3, 1>(0, 3) = eye;
-  const Camera cam = Camera::FromBlender(p);
+  const Camera cam = testing::LookAt({0, -12, 8}, {0, 0, 0}, 320, 240, 50.0);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<Eigen::Vector2d> px;
@@ -143,24 +134,10 @@ TEST(Scene, CameraPixelsInPacketsHitWhatSingleRaysHit) {
 // shorten the shadow (2e-4 of this model's diagonal, 4.5 cm, lit the last
 // 4.5 cm of it and biased every Sun found from shadows 0.45 deg low).
 TEST(Scene, APolesShadowOnAWideGroundEndsWhereGeometryPutsIt) {
-  std::vector<Eigen::Vector3f> v = {
-      {-80, -80, 0}, {80, -80, 0}, {80, 80, 0}, {-80, 80, 0}};
-  std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
-  std::vector<int32_t> ids = {0, 0};
-  const int b = static_cast<int>(v.size());
-  for (int i = 0; i < 8; ++i) {
-    v.emplace_back((i & 1) ? 0.1f : -0.1f, (i & 2) ? 0.1f : -0.1f,
-                   (i & 4) ? 2.5f : 0.f);
-  }
-  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    t.emplace_back(b + q[0], b + q[1], b + q[2]);
-    t.emplace_back(b + q[0], b + q[2], b + q[3]);
-    ids.push_back(1);
-    ids.push_back(1);
-  }
-  const Scene scene(v, t, ids);
+  testing::Mesh m;
+  m.Ground(80.f, 0);
+  m.Box({-0.1f, -0.1f, 0.f}, {0.1f, 0.1f, 2.5f}, 1);
+  const Scene scene = m.Build();
   EXPECT_GT(scene.surface_offset(), 1e-4f);  // above float32's error here
   // The Sun 45 deg up in the west: the tip falls at x = 0.1 + 2.5.
   const Eigen::Vector3f to_sun = Eigen::Vector3f(-1, 0, 1).normalized();
