@@ -76,8 +76,8 @@ import datetime as dt
 import hashlib
 import json
 import os
-import statistics
 import shutil
+import statistics
 import subprocess
 import sys
 import time

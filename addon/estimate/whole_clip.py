@@ -140,8 +140,8 @@ CIRCLE_INLIER_FLOOR_DEG = 1.5
 # A Sun below the horizon, the frame's own or its segment's circle's,
 # lights no ground, whatever the frame shows (a grazing Sun's fitted
 # contrast means nothing: the tracker fitted 5-9 on suite frames whose Sun
-# had set by 0.3 deg). A readable frame without
-# sunlight, in a segment whose other frames show it, says NO; else UNKNOWN.
+# had set by 0.3 deg). A readable frame without sunlight, in a segment
+# whose other frames show it, says NO; else UNKNOWN.
 SUNLIT_MIN_CONTRAST = 1.3
 # A frame with evidence of its own that the tracker could not confirm (a
 # ground the tracker cannot use: a bollard named as the ground left 8 of the
