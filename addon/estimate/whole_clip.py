@@ -143,6 +143,14 @@ CIRCLE_INLIER_FLOOR_DEG = 1.5
 # had set by 0.3 deg). A readable frame without sunlight, in a segment
 # whose other frames show it, says NO; else UNKNOWN.
 SUNLIT_MIN_CONTRAST = 1.3
+# A hazy Sun casts weaker shadows: a frame fitted at least
+# SUNLIT_HAZY_CONTRAST is in sunlight too when its segment stands on frames
+# at SUNLIT_MIN_CONTRAST, though it never makes a segment stand on its own.
+# The Marseille March dial's hazy frames (08:15, 14:30, 17:49, the gnomon's
+# shadow faint but there) fit 1.06-1.21 and its frames under cloud 0.77-0.86;
+# twilight5's night frames fit 1.11-1.22 in a segment of their own, a jump
+# the path would make 32 deg up.
+SUNLIT_HAZY_CONTRAST = 1.0
 # A frame with evidence of its own that the tracker could not confirm (a
 # ground the tracker cannot use: a bollard named as the ground left 8 of the
 # plaza's 32 sunny frames unconfirmed) is in sunlight while its best
@@ -777,12 +785,14 @@ class _WholeClip:
             doubt_off_circle(seg, t, seconds is not None, self.fit_circle)
 
     def decide_sunlight(self) -> None:
-        """Direct sunlight per frame (SUNLIT_MIN_CONTRAST above): frames
-        without it keep no Sun of their own and confidence 0, and a segment
-        of such frames joins the one before it (or after)."""
+        """Direct sunlight per frame (SUNLIT_MIN_CONTRAST and
+        SUNLIT_HAZY_CONTRAST above): frames without it keep no Sun of their
+        own and confidence 0, and a segment of such frames joins the one
+        before it (or after)."""
         frames = self.result.frames
-        tracked = [r.sun_in_world is not None and r.refined and
-                   _contrast(r.tracked) >= SUNLIT_MIN_CONTRAST for r in frames]
+        contrast = [_contrast(r.tracked) if r.sun_in_world is not None and r.refined else 0.0
+                    for r in frames]
+        tracked = [c >= SUNLIT_MIN_CONTRAST for c in contrast]
         explained = self.path.explained
         shares = sorted(explained[k] for k, ok in enumerate(tracked) if ok)
         typical = shares[len(shares) // 2] if shares else 0.0
@@ -797,7 +807,8 @@ class _WholeClip:
             r.shadows_in_view = sunlit or not self.out_of_view[k]
             if not sunlit and self.out_of_view[k]:
                 r.reason = SHADOWS_OUT_OF_VIEW
-        for k in self.night_by_the_clock(tracked):
+        night = set(self.night_by_the_clock(tracked))
+        for k in night:
             frames[k].sunlight = Sunlight.NO
         bounds = _without_dark_segments(
             self.bounds, [r.sunlight == Sunlight.YES and self.path.margin[k] >= SEGMENT_MIN_MARGIN
@@ -809,6 +820,13 @@ class _WholeClip:
             for s, (lo, hi) in enumerate(zip(bounds, bounds[1:])):
                 for r in frames[lo:hi]:
                     r.segment = s
+        for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
+            if not any(tracked[lo:hi]):
+                continue
+            for k in range(lo, hi):  # a hazy Sun in a segment that shows it
+                if frames[k].sunlight == Sunlight.NO and k not in night and \
+                        contrast[k] >= SUNLIT_HAZY_CONTRAST:
+                    frames[k].sunlight = Sunlight.YES
         for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
             if not any(r.sunlight == Sunlight.YES for r in frames[lo:hi]):
                 for r in frames[lo:hi]:  # nothing in the clip shows shadows here

@@ -91,7 +91,9 @@ def world():
     return scene, camera, hits, texture * gradient
 
 
-def draw(world, d, seed=0):
+def draw(world, d, seed=0, direct=0.75):
+    """A frame in sunlight: ambient 0.25 and the Sun's `direct` light (a
+    hazy Sun's is weaker)."""
     scene, camera, hits, albedo = world
     seen = hits["object_id"] >= 0
     pts = np.nan_to_num(hits["point"]).astype(np.float32)
@@ -99,7 +101,7 @@ def draw(world, d, seed=0):
     origins = pts + 1e-3 * normals
     shadow = scene.occluded(origins, np.repeat(d[None].astype(np.float32), len(pts), axis=0))
     cos = np.clip(normals @ d.astype(np.float32), 0, None)
-    light = (0.25 + 0.75 * cos * ~shadow).reshape(H, W)
+    light = (0.25 + direct * cos * ~shadow).reshape(H, W)
     img = np.where(seen.reshape(H, W), albedo * light, 0.6)
     noise = np.random.default_rng(seed).normal(0, 0.005, img.shape)
     return np.clip(img + noise, 0, 1).astype(np.float32)
@@ -404,6 +406,25 @@ def test_frames_after_sunset_have_no_sunlight_and_a_predicted_sun(world, times):
     for k in range(lit, n):  # the Sun's circle carried on
         assert zs[k] is not None, k
         assert error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), truth[k]) < 1.0, k
+
+
+def test_a_hazy_suns_faint_shadows_are_sunlight_in_a_clip_that_shows_the_sun(world):
+    """A hazy Sun's shadows are faint: the tracker fits them a contrast
+    between SUNLIT_HAZY_CONTRAST and SUNLIT_MIN_CONTRAST (1.08-1.15 here, as
+    on the Marseille March dial's hazy frames). Among frames that show the
+    Sun they are in sunlight and keep their own Sun (issue 25)."""
+    n = 24
+    truth = [path(k, n) for k in range(n)]
+    hazy = range(1, n, 3)
+    frames = [draw(world, truth[k], k, direct=0.28 if k in hazy else 0.75) for k in range(n)]
+    result = run(world, frames, [600.0 * k for k in range(n)])
+    assert len(result.segments) == 1
+    for k in hazy:
+        r = result.frames[k]
+        assert r.sunlight == whole_clip.Sunlight.YES and r.sun_in_world is not None, (k, r)
+        assert whole_clip.SUNLIT_HAZY_CONTRAST <= r.tracked.contrast < \
+            whole_clip.SUNLIT_MIN_CONTRAST, (k, r.tracked.contrast)
+        assert error_deg(r.sun_in_world, truth[k]) < 1.0, (k, r)
 
 
 def test_dark_segments_join_their_neighbours():
