@@ -66,7 +66,9 @@ Sun below the horizon how many the track flags without direct sunlight and
 the highest Sun it answers there (and the same for the overcast frames,
 with how far their predicted Sun is from the truth); then the reliability table (confidence in
 10 bins against the share of frames within 2 deg), its expected calibration
-error and the frames more than 5 deg off at confidence >= 0.5. Figures only: the
+error and the frames more than 5 deg off at confidence >= 0.5; then the
+tracked frames' raw Suns by how far the shadows pin their height
+(sun_height_pinned_deg). Figures only: the
 exit code is 0 whatever the figures (non-zero only for bad flags).
 """
 import argparse
@@ -288,8 +290,14 @@ def score(key, folder, track_path, wall_s, error):
         d = evaluation.angle_between_deg(
             evaluation.direction(e.zenith_deg, e.azimuth_deg + track.north_offset_deg),
             evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
-        per_frame.append({"frame": t.frame, "error_deg": round(d, 4),
-                          "confidence": e.confidence})
+        row_frame = {"frame": t.frame, "error_deg": round(d, 4), "confidence": e.confidence}
+        if e.sun_height_pinned_deg is not None and e.raw_zenith_deg is not None:
+            row_frame["pinned_deg"] = e.sun_height_pinned_deg
+            row_frame["raw_error_deg"] = round(evaluation.angle_between_deg(
+                evaluation.direction(e.raw_zenith_deg,
+                                     e.raw_azimuth_deg + track.north_offset_deg),
+                evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)), 4)
+        per_frame.append(row_frame)
     row["night"] = night
     timing = (track.extra or {}).get("timing", {})
     row.update(estimated=rep.frames_estimated,
@@ -345,6 +353,21 @@ def zenith_bias(report):
     return sum(off) / len(off) if off else None
 
 
+def pinned_table(frames):
+    """The tracked frames' raw Suns by how far their height could move
+    unnoticed (sun_height_pinned_deg): [(step, frames, share within 2 deg,
+    frames more than 5 deg off)] (docs/accuracy.md, "Suns whose height the
+    shadows do not pin"; a frame handed to its circle counts with the
+    circle's Sun)."""
+    out = []
+    for step in sorted({p["pinned_deg"] for p in frames if "pinned_deg" in p}):
+        errors = [p["raw_error_deg"] for p in frames if p.get("pinned_deg") == step]
+        out.append((step, len(errors),
+                    sum(e <= CONFIDENT_WITHIN_DEG for e in errors) / len(errors),
+                    sum(e > CONFIDENT_WRONG_DEG for e in errors)))
+    return out
+
+
 def summary(rows):
     frames = [p for r in rows for p in r.get("per_frame", [])]
     confident = [p for p in frames if p["confidence"] is not None and
@@ -385,7 +408,18 @@ def summary(rows):
         "total_s_sum": sum(times) if times else None,
         "failed_runs": [r["scene"] for r in rows if r.get("error")],
         "zenith_bias_median": statistics.median(biases) if biases else None,
+        "raw_by_pinned": pinned_table(frames),
     }
+
+
+def print_pinned(s):
+    """The raw Suns by how far the tracked shadows pin their height."""
+    if s["raw_by_pinned"]:
+        print("raw Suns by how far their height could move unnoticed (deg: frames, within "
+              f"{CONFIDENT_WITHIN_DEG:g} deg, more than {CONFIDENT_WRONG_DEG:g} off; 90: not "
+              "pinned within 8):")
+        print("  " + "; ".join(f"{step:g}: {n}, {share:.0%}, {wrong}"
+                               for step, n, share, wrong in s["raw_by_pinned"]))
 
 
 def print_reliability(s):
@@ -561,6 +595,7 @@ def main(argv=None):
         s = summary(members)
         print_summary(s, smoothing)
         print_reliability(s)
+        print_pinned(s)
         twins = [r for r in rows if r["scene"].endswith(TRUE_SUFFIX)]
         entry = {"summary": s, "scenes": rows}
         if twins:

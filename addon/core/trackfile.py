@@ -69,6 +69,10 @@ class FrameEstimate:
     # Share of the tracked shadows' band the fitted Sun leaves on the wrong
     # side of its edges (0..1): how well the model's shadows fit; optional.
     shadow_misfit: Optional[float] = None
+    # How far (deg) the Sun's height could move before the tracked shadows
+    # fit worse: 0.5-8, or 90 when their far ends are out of view and any
+    # height fits alike; optional.
+    sun_height_pinned_deg: Optional[float] = None
     # Capture time (ISO 8601, UTC) when the run was given the frames' times.
     time_utc: Optional[str] = None
     # Direct sunlight on the frame (None: not decided, e.g. the thesis
@@ -236,6 +240,8 @@ def _frame_to_json(f: FrameEstimate) -> Dict[str, Any]:
         d["sun_ambient_ratio"] = float(f.sun_ambient_ratio)
     if f.shadow_misfit is not None:
         d["shadow_misfit"] = round(float(f.shadow_misfit), 4)
+    if f.sun_height_pinned_deg is not None:
+        d["sun_height_pinned_deg"] = float(f.sun_height_pinned_deg)
     if f.sunlight is not None:
         d["sunlight"] = Sunlight(f.sunlight).value
     if f.predicted:
@@ -442,6 +448,8 @@ def _frame_from_json(fd: Any) -> FrameEstimate:
         reason=_text(fd.get("reason"), "reason"),
         sun_ambient_ratio=_number(fd.get("sun_ambient_ratio"), "sun_ambient_ratio", 0.0),
         shadow_misfit=_number(fd.get("shadow_misfit"), "shadow_misfit", 0.0, 1.0),
+        sun_height_pinned_deg=_number(fd.get("sun_height_pinned_deg"),
+                                      "sun_height_pinned_deg", 0.0, 90.0),
         time_utc=_text(fd.get("time_utc"), "time_utc"),
         sunlight=_sunlight(fd.get("sunlight")),
         predicted=_flag(fd.get("predicted"), "predicted"))

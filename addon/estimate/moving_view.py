@@ -43,6 +43,7 @@ class FrameShadow:
     shadow_end_px: Tuple[float, float]
     contrast: float
     misfit: float
+    elevation_pinned_deg: float
 
 
 def posed(camera: Any) -> Any:
@@ -168,4 +169,5 @@ class MovingView:
                     moved = camera.project(points.astype(np.float64))[0]
             r.tracked = FrameShadow((float(moved[0][0]), float(moved[0][1])),
                                     (float(moved[1][0]), float(moved[1][1])),
-                                    float(t.contrast), float(t.misfit))
+                                    float(t.contrast), float(t.misfit),
+                                    float(t.elevation_pinned_deg))

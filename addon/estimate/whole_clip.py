@@ -42,7 +42,7 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tupl
 
 import numpy as np
 
-from . import finish, frames as clip_frames, motion, native_loader, notes
+from . import calibration, finish, frames as clip_frames, motion, native_loader, notes
 from .moving_view import SHADOWS_IN_VIEW, SHADOWS_OUT_OF_VIEW, MovingView, reference_camera
 from .errors import Cancelled, EstimateError
 from .frames import Gray
@@ -83,6 +83,25 @@ FULL_CONFIDENCE_MARGIN = 12.0
 # frame is refined again around the path's direction, and a result still
 # that far keeps half its confidence.
 AGREE_DEG = 4.0
+# A tracked Sun whose elevation the shadows in view do not pin within this
+# (TrackedFrame.elevation_pinned_deg: the casters' tops' shadows out of
+# view, so any lower Sun fits alike) answers to the circle of the frames
+# that pin it, when there are enough of them (doubt_off_circle): so far
+# off it that a pinned Sun would not be taken for the Sun's
+# (OFF_CIRCLE_UNLIT_DEG), with its shadows pointing the circle's way, it
+# takes the circle's Sun, its support held just under
+# calibration.DOUBTED_SUPPORT (UNPINNED_SUPPORT: a doubted frame, under 0.5
+# whatever the map). On the static suite tracked Suns pinned within 0.5 deg
+# were within 2 deg 96% of the time, within 4 or 8 deg 76% and 69%, not
+# within 8 deg 57% (69 of 327 more than 5 deg off); moving12's first 21
+# frames, their shadows running out of view, came back up to 32 deg too low.
+# Nearer the circle such frames are doubted as any Sun off it is: handing
+# them to the circle too moved the smoothing at the end of the Marseille
+# January clip (1.50 -> 1.75 deg zenith mean), and a limit of 2 deg took
+# the dial's midday (its small gnomon shadow pins 4-8 deg) out of the
+# circle (1.50 -> 1.97).
+ELEVATION_PINNED_MAX_DEG = 8.0
+UNPINNED_SUPPORT = 0.95 * calibration.DOUBTED_SUPPORT
 # Confidence of frames without sky evidence of their own: carried by the
 # path alone; followed by the tracker between frames with evidence (its
 # sub-pixel fit sees thin shadows the sky's samples miss); followed past the
@@ -149,7 +168,9 @@ SUNLIT_MIN_CONTRAST = 1.3
 # The Marseille March dial's hazy frames (08:15, 14:30, 17:49, the gnomon's
 # shadow faint but there) fit 1.06-1.21 and its frames under cloud 0.77-0.86;
 # twilight5's night frames fit 1.11-1.22 in a segment of their own, a jump
-# the path would make 32 deg up.
+# the path would make 32 deg up. Such a frame further than CIRCLE_DOUBT_DEG
+# from its segment's circle is not in sunlight (the January dial's last
+# capture, in shade, fits 1.11 with a Sun 9 deg off its circle).
 SUNLIT_HAZY_CONTRAST = 1.0
 # A frame with evidence of its own that the tracker could not confirm (a
 # ground the tracker cannot use: a bollard named as the ground left 8 of the
@@ -427,6 +448,20 @@ def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
         else:
             k += 1
     return bounds
+
+
+def _height_unpinned(r: "RawFrame") -> bool:
+    """Whether a frame's tracked Sun has an elevation its shadows in view
+    do not pin (ELEVATION_PINNED_MAX_DEG)."""
+    pinned = getattr(r.tracked, "elevation_pinned_deg", None)  # a moving camera's has none
+    return r.refined and pinned is not None and pinned > ELEVATION_PINNED_MAX_DEG
+
+
+def _azimuth_apart_deg(a, b) -> float:
+    """How far apart two Suns' azimuths are (deg, 0-180)."""
+    az_a = angles.angles_from_sun_in_world(a)[1]
+    az_b = angles.angles_from_sun_in_world(b)[1]
+    return abs(float(angles.wrap_signed_deg(az_a - az_b)))
 
 
 def _contrast(tracked: Any) -> float:
@@ -860,17 +895,19 @@ class _WholeClip:
     def sunlight_against_circle(self) -> None:
         """A Sun below the horizon (the frame's own, or its segment's
         circle's) lights no ground: whatever the frame shows, it has no
-        direct sunlight. A Sun far off its circle (OFF_CIRCLE_UNLIT_DEG)
-        is not the Sun's."""
+        direct sunlight. A Sun far off its circle (OFF_CIRCLE_UNLIT_DEG;
+        a hazy Sun's faint shadows, CIRCLE_DOUBT_DEG) is not the Sun's."""
         night = set(self.night_by_the_clock())
         self.result.clock_night = [self.frames[k] for k in sorted(night)]
         for k, r in enumerate(self.result.frames):
+            hazy = r.tracked is not None and _contrast(r.tracked) < SUNLIT_MIN_CONTRAST
             if k in night or any(sun is not None and sun[2] <= 0.0
                                  for sun in (r.sun_in_world, r.circle_in_world)):
                 r.sunlight = Sunlight.NO
                 self.unlit(r, "the Sun is below the horizon here")
             elif r.sunlight == Sunlight.YES and r.circle_in_world is not None and \
-                    _angle_deg(r.sun_in_world, r.circle_in_world) > OFF_CIRCLE_UNLIT_DEG:
+                    _angle_deg(r.sun_in_world, r.circle_in_world) > (
+                        CIRCLE_DOUBT_DEG if hazy else OFF_CIRCLE_UNLIT_DEG):
                 r.sunlight = Sunlight.UNKNOWN
                 self.unlit(r, "the shadows on this frame are not where the Sun's path puts "
                               "them")
@@ -1047,7 +1084,12 @@ def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_
     the ratio."""
     suns = [r.sun_in_world if r.sun_in_world is not None and r.confidence >= 0.3 else None
             for r in segment]
-    fit = fit_circle(list(t), suns, CIRCLE_INLIER_FLOOR_DEG,
+    # The frames whose shadows pin the Sun's height set the circle when
+    # there are enough of them for a fit (ELEVATION_PINNED_MAX_DEG).
+    pinned = [None if sun is None or _height_unpinned(r) else sun
+              for sun, r in zip(suns, segment)]
+    by_pinned = sum(sun is not None for sun in pinned) >= trimmed_circle.MIN_FRAMES
+    fit = fit_circle(list(t), pinned if by_pinned else suns, CIRCLE_INLIER_FLOOR_DEG,
                      [max(r.confidence, 1e-3) for r in segment],
                      times_are_seconds=times_are_seconds)
     if not fit.success:
@@ -1058,7 +1100,14 @@ def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_
         if r.sun_in_world is None:
             continue
         off = _angle_deg(r.sun_in_world, r.circle_in_world)
-        if off > CIRCLE_DOUBT_DEG:
+        if off > OFF_CIRCLE_UNLIT_DEG and by_pinned and _height_unpinned(r) and \
+                _azimuth_apart_deg(r.sun_in_world, r.circle_in_world) <= CIRCLE_DOUBT_DEG:
+            # Its shadows point where the circle's Sun puts them and cannot
+            # tell its height: the circle's Sun it is, doubted (not taken
+            # for shadows that are not the Sun's: sunlight_against_circle).
+            r.sun_in_world = r.circle_in_world
+            r.on_circle = min(r.confidence, UNPINNED_SUPPORT)
+        elif off > CIRCLE_DOUBT_DEG:
             r.on_circle = r.confidence * (CIRCLE_DOUBT_DEG / off) ** 2
 
 

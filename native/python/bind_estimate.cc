@@ -295,6 +295,7 @@ void BindEstimate(py::module_& m) {
       .def_readonly("contrast", &TrackedFrame::contrast)
       .def_readonly("band_pixels", &TrackedFrame::band_pixels)
       .def_readonly("misfit", &TrackedFrame::misfit)
+      .def_readonly("elevation_pinned_deg", &TrackedFrame::elevation_pinned_deg)
       .def_readonly("rays", &TrackedFrame::rays)
       .def_readonly("evaluations", &TrackedFrame::evaluations)
       .def_readonly("shadow_start_px", &TrackedFrame::shadow_start_px)

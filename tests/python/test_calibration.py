@@ -205,6 +205,7 @@ class _Tracked:
     def __init__(self, misfit):
         self.misfit = misfit
         self.contrast = 2.0
+        self.elevation_pinned_deg = float("inf")
         self.shadow_start_px = self.shadow_end_px = (float("nan"), float("nan"))
 
 
@@ -250,12 +251,15 @@ def test_a_clip_whose_model_does_not_fit_its_footage_stays_below_one_half_and_sa
     assert rough.problem("confidence") is not None
     back = trackfile.from_json(trackfile.to_json(rough))
     assert back.frames[5].shadow_misfit == pytest.approx(limit + 0.05)
+    # A height its shadows do not pin (inf) is written as any height.
+    assert back.frames[5].sun_height_pinned_deg == 90.0
 
 
 def test_the_thesis_method_measures_no_model_misfit():
     track = _finished_with_misfits([0.5] * 5, method="thesis")
     assert "model_misfit" not in track.extra and track.problem("model") is None
-    assert all(f.shadow_misfit is None for f in track.frames)
+    assert all(f.shadow_misfit is None and f.sun_height_pinned_deg is None
+               for f in track.frames)
 
 
 def _bench_calibrate():

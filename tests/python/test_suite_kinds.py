@@ -219,3 +219,25 @@ def test_the_score_reports_a_zenith_bias_that_no_error_magnitude_shows(tmp_path)
     third = dict(row, zenith_bias=0.9)
     assert suite.summary([row, other, third])["zenith_bias_median"] == \
         pytest.approx(row["zenith_bias"])
+
+
+def test_the_score_splits_raw_suns_by_how_far_their_height_is_pinned(tmp_path):
+    """bench/suite.py: the raw Suns of tracked frames, grouped by
+    sun_height_pinned_deg, with the share within 2 deg and those more than
+    5 deg off; frames without it are left out."""
+    trackfile = suite.trackfile
+    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=50.0,
+                                                            azimuth_deg=120.0)
+                                    for i in range(4)])
+    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+    raw_off = [0.2, 1.0, 12.0, 3.0]
+    pinned = [0.5, 0.5, 90.0, None]
+    estimate = trackfile.Track(frames=[trackfile.FrameEstimate(
+        frame=i + 1, zenith_deg=50.0, azimuth_deg=120.0, raw_zenith_deg=50.0 + o,
+        raw_azimuth_deg=120.0, confidence=0.9, sun_height_pinned_deg=p)
+        for i, (o, p) in enumerate(zip(raw_off, pinned))])
+    trackfile.write_track(str(tmp_path / "est.sun.json"), estimate)
+    row = suite.score("x", str(tmp_path), str(tmp_path / "est.sun.json"), 1.0, None)
+    table = suite.summary([row])["raw_by_pinned"]
+    assert [(step, n, share, wrong) for step, n, share, wrong in table] == \
+        [(0.5, 2, 1.0, 0), (90.0, 1, 0.0, 1)]

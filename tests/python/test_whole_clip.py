@@ -24,7 +24,7 @@ if "sunlapse" not in sys.modules:
 native = pytest.importorskip("_native")
 sys.modules.setdefault("sunlapse._native", native)
 from sunlapse.core import trimmed_circle  # noqa: E402
-from sunlapse.estimate import finish, options as estimate_options  # noqa: E402
+from sunlapse.estimate import calibration, finish, options as estimate_options  # noqa: E402
 from sunlapse.estimate.raw import RawSun  # noqa: E402
 from sunlapse.core import angles  # noqa: E402
 from sunlapse.estimate import moving_view as moving, whole_clip  # noqa: E402
@@ -285,6 +285,56 @@ def test_suns_off_their_circle_lose_confidence():
         else:
             assert conf[f] == 0.95, f
     assert conf[20] > conf[7] > conf[33]  # 6, 8 and 10 deg off
+
+
+class _Pinned:
+    """What doubt_off_circle reads of a native TrackedFrame."""
+
+    def __init__(self, within_deg):
+        self.elevation_pinned_deg = within_deg
+
+
+def test_suns_whose_height_the_shadows_do_not_pin_take_the_pinned_frames_circle():
+    """A camera that sees only the casters' feet (moving12's first frames)
+    pins the Sun's azimuth, not its height: any lower Sun lengthens the
+    shadows out of view alike, and the tracker settles anywhere down there.
+    Such frames, too far off the circle of the frames that pin it for
+    their shadows to be taken for the Sun's, take that circle's Sun,
+    doubted; one whose shadows point another way keeps its Sun and loses
+    confidence as any Sun off its circle does."""
+    n = 30
+    times = frame_times(n)  # 40 N, 1 June, every 6 minutes from 08:00 UTC
+    unpinned = set(range(1, 13))  # frames 1-12
+    raws, truth = [], []
+    for t in times:
+        z, a = native.sun_position(t.year, t.month, t.day, t.hour, t.minute, 0.0, 40.0, 0.0)
+        truth.append(sun(z, a))
+        k = len(raws)
+        low = 12.0 + k if k + 1 in unpinned else 0.0  # 12-23 deg too low
+        turned = 10.0 if k + 1 == 12 else 0.0  # and frame 12 turned
+        raws.append((k + 1, z + low, (a + turned) % 360.0, 0.95))
+    seg = [whole_clip.RawFrame(f, angles.sun_in_world_from_angles(z, a), c, on_circle=c,
+                               refined=True, tracked=_Pinned(99.0 if f in unpinned else 0.5))
+           for f, z, a, c in raws]
+    seconds = [(t - times[0]).total_seconds() for t in times]
+    whole_clip.doubt_off_circle(seg, seconds, True, trimmed_circle.fit_trimmed)
+    for k, r in enumerate(seg):
+        if r.frame in unpinned and r.frame != 12:
+            assert error_deg(r.sun_in_world, truth[k]) < 0.5, r
+            assert r.on_circle < calibration.DOUBTED_SUPPORT, r
+        elif r.frame == 12:
+            assert error_deg(r.sun_in_world, truth[k]) > 10.0, r  # its own
+            assert r.on_circle < 0.95 * (whole_clip.CIRCLE_DOUBT_DEG / 10.0) ** 2, r
+        else:
+            assert r.on_circle == 0.95 and error_deg(r.sun_in_world, truth[k]) < 1e-6, r
+    # Too few frames pin it for a circle of their own: all of them set it,
+    # and the frames keep their Suns.
+    few = [whole_clip.RawFrame(r.frame, angles.sun_in_world_from_angles(z, a), 0.95,
+                               on_circle=0.95, refined=True,
+                               tracked=_Pinned(0.5 if r.frame > n - 4 else 99.0))
+           for r, (_, z, a, _) in zip(seg, raws)]
+    whole_clip.doubt_off_circle(few, seconds, True, trimmed_circle.fit_trimmed)
+    assert all(r.confidence == 0.95 for r in few)
 
 
 def test_frames_past_the_confident_span_follow_the_circle_not_the_fit():

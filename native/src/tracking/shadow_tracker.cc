@@ -30,6 +30,9 @@ constexpr double kMaxWalkSteps = 10;
 // A moving camera's frame that sees less than this share of the ground (or
 // of the band) it is asked about is out of view for the tracker.
 constexpr double kMinSeenShare = 0.25;
+// A step of the Sun's elevation the band's pixels notice: this many noise
+// variances more of squared residual (TrackedFrame::elevation_pinned_deg).
+constexpr double kPinChi2 = 25.0;
 
 }  // namespace
 
@@ -435,6 +438,36 @@ struct ShadowTracker::Impl {
     RobustAffineFit(n, band_x.data(), band_y.data(), nullptr, 1, scale, 3,
                     &fit);
     return fit.cost;
+  }
+
+  // See TrackedFrame::elevation_pinned_deg. The fit's noise is the MAD of
+  // its residuals at d; with the Cauchy scale well above it a cost step
+  // is a chi-square step times noise^2 / scale^2. Overwrites `fit`.
+  double ElevationPinned(const Eigen::Vector3d& d, double scale) {
+    if (fit.residual.empty()) return kInf;
+    std::vector<double> r(fit.residual.size());
+    for (size_t i = 0; i < r.size(); ++i) r[i] = std::abs(fit.residual[i]);
+    std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+    const double noise = std::max(1e-6, 1.4826 * r[r.size() / 2]);
+    const double to_chi2 = scale * scale / (noise * noise);
+    const double c0 = fit.cost;
+    Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - d.z() * d;
+    if (up.norm() < 1e-9) return 0.0;  // overhead: every way is down
+    up.normalize();
+    for (double delta : {0.5, 1.0, 2.0, 4.0, 8.0}) {
+      bool pinned = true;
+      for (double sign : {1.0, -1.0}) {
+        const Eigen::Vector3d e =
+            (std::cos(delta * kDeg) * d + sign * std::sin(delta * kDeg) * up)
+                .normalized();
+        // Below the horizon is no Sun: that side is bounded.
+        if (e.z() <= 0.01) continue;
+        if ((Cost(e, scale) - c0) * to_chi2 < kPinChi2) pinned = false;
+        if (!pinned) break;
+      }
+      if (pinned) return delta;
+    }
+    return kInf;
   }
 
   // Share of the band's pixels on the wrong side of a boundary under the
@@ -877,6 +910,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   out.confidence =
       inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
   out.misfit = s.Misfit(frame, found);
+  out.elevation_pinned_deg = s.ElevationPinned(found, scale);
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;

@@ -267,6 +267,42 @@ TEST(ShadowTracker, MisfitIsLowWithTheTrueModelAndHighWithAMisplacedCaster) {
   EXPECT_GT(misplaced, 0.1);
 }
 
+// A pole's shadow pins the Sun's elevation by its far end (the pole's top):
+// seen whole, a degree higher or lower moves that end; with only its foot in
+// view (a tight camera), any lower Sun lengthens it out of view alike.
+TEST(ShadowTracker, ElevationIsPinnedOnlyWithTheShadowsFarEndInView) {
+  testing::Mesh m;
+  m.Ground(12, 0);
+  m.Box({-0.1f, -0.1f, 0}, {0.1f, 0.1f, 2.5f}, 1);
+  const Scene scene = m.Build();
+  ShadowTrackerOptions o;
+  o.ground_object_ids = {0};
+  // The shadow runs 3 m toward -X, +Y (azimuth 135, zenith 50).
+  auto pinned = [&](const Camera& cam, bool* tip_in_view) {
+    ShadowTracker tracker(scene, cam, o);
+    tracker.Initialize(
+        testing::RenderLambertian(scene, cam, Sun(50, 133), Textured(1)),
+        Sun(50, 133));
+    const TrackedFrame r = tracker.Track(
+        testing::RenderLambertian(scene, cam, Sun(50, 135), Textured(2)));
+    EXPECT_TRUE(r.ok) << r.reason;
+    *tip_in_view = std::isfinite(r.shadow_end_px.x());
+    return r.elevation_pinned_deg;
+  };
+  bool wide_tip = false, tight_tip = true;
+  const double wide =
+      pinned(testing::LookAt({3, -7, 7}, {-1, 1, 0}, 320, 240), &wide_tip);
+  const double tight =
+      pinned(testing::LookAt({1.2, -2.5, 2.2}, {-0.4, 0.4, 0}, 320, 240, 70),
+             &tight_tip);
+  std::printf("elevation pinned within: whole shadow %g deg, foot only %g\n",
+              wide, tight);
+  ASSERT_TRUE(wide_tip);
+  ASSERT_FALSE(tight_tip);
+  EXPECT_LE(wide, 1.0);
+  EXPECT_GT(tight, 8.0);
+}
+
 TEST(ShadowTracker, RejectsBadSetup) {
   Fixture fx;
   ShadowTrackerOptions o;  // no ground

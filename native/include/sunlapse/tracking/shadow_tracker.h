@@ -78,6 +78,12 @@ struct TrackedFrame {
   // A few percent with the true model; a hand-made model's misplaced
   // casters leave 10-40% whatever the Sun (docs/accuracy.md).
   double misfit = 0.0;
+  // How far (deg) the Sun's elevation can move either way before the fit
+  // gets significantly worse: the smallest of 0.5, 1, 2, 4, 8 at which both
+  // sides cost kPinChi2 more (in the band's noise), else infinity. Shadows
+  // whose far ends (the casters' tops) are out of view pin the azimuth only:
+  // any lower Sun lengthens them out of view alike.
+  double elevation_pinned_deg = 0.0;
   int rays = 0;         // shadow rays cast this frame (the tracker's cost)
   int evaluations = 0;  // candidate Suns scored this frame
   // The longest modelled shadow on this frame: caster foot and shadow tip, in
