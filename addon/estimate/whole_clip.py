@@ -91,9 +91,9 @@ AGREE_DEG = 4.0
 # (OFF_CIRCLE_UNLIT_DEG), with its shadows pointing the circle's way, it
 # takes the circle's Sun, its support held just under
 # calibration.DOUBTED_SUPPORT (UNPINNED_SUPPORT: a doubted frame, under 0.5
-# whatever the map). On the static suite tracked Suns pinned within 0.5 deg
-# were within 2 deg 96% of the time, within 4 or 8 deg 76% and 69%, not
-# within 8 deg 57% (69 of 327 more than 5 deg off); moving12's first 21
+# whatever the map). On the static suite raw Suns pinned within 0.5 deg are
+# within 2 deg 96% of the time, within 4 or 8 deg 80% and 78%, not within
+# 8 deg 63% (45 of 310 more than 5 deg off); moving12's first 21
 # frames, their shadows running out of view, came back up to 32 deg too low.
 # Nearer the circle such frames are doubted as any Sun off it is: handing
 # them to the circle too moved the smoothing at the end of the Marseille
