@@ -134,10 +134,7 @@ TEST(Scene, CameraPixelsInPacketsHitWhatSingleRaysHit) {
 // shorten the shadow (2e-4 of this model's diagonal, 4.5 cm, lit the last
 // 4.5 cm of it and biased every Sun found from shadows 0.45 deg low).
 TEST(Scene, APolesShadowOnAWideGroundEndsWhereGeometryPutsIt) {
-  testing::Mesh m;
-  m.Ground(80.f, 0);
-  m.Box({-0.1f, -0.1f, 0.f}, {0.1f, 0.1f, 2.5f}, 1);
-  const Scene scene = m.Build();
+  const Scene scene = testing::PoleOnGround(80.f, 2.5f).Build();
   EXPECT_GT(scene.surface_offset(), 1e-4f);  // above float32's error here
   // The Sun 45 deg up in the west: the tip falls at x = 0.1 + 2.5.
   const Eigen::Vector3f to_sun = Eigen::Vector3f(-1, 0, 1).normalized();

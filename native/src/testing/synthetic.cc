@@ -41,6 +41,13 @@ Mesh BoxAndPole() {
   return m;
 }
 
+Mesh PoleOnGround(float ground_half, float height) {
+  Mesh m;
+  m.Ground(ground_half, 0);
+  m.Box({-0.1f, -0.1f, 0.f}, {0.1f, 0.1f, height}, 1);
+  return m;
+}
+
 Mesh BenchScene() {
   Mesh m = BoxAndPole();
   m.Box({-3, 2, 0}, {-2.85f, 2.15f, 2.5f}, 3);

@@ -28,6 +28,9 @@ struct Mesh {
 
 // Ground (id 0), a box (1) and a pole (2).
 Mesh BoxAndPole();
+// A ground (0) `ground_half` m each way and a 0.2 m square pole (1),
+// `height` m tall, at the origin.
+Mesh PoleOnGround(float ground_half, float height);
 // BoxAndPole plus a second pole (3) and a wall (4): the benchmarks' scene.
 Mesh BenchScene();
 // The benchmarks' camera on BenchScene at 1920x1080.

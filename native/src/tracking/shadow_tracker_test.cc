@@ -271,10 +271,7 @@ TEST(ShadowTracker, MisfitIsLowWithTheTrueModelAndHighWithAMisplacedCaster) {
 // seen whole, a degree higher or lower moves that end; with only its foot in
 // view (a tight camera), any lower Sun lengthens it out of view alike.
 TEST(ShadowTracker, ElevationIsPinnedOnlyWithTheShadowsFarEndInView) {
-  testing::Mesh m;
-  m.Ground(12, 0);
-  m.Box({-0.1f, -0.1f, 0}, {0.1f, 0.1f, 2.5f}, 1);
-  const Scene scene = m.Build();
+  const Scene scene = testing::PoleOnGround(12.f, 2.5f).Build();
   ShadowTrackerOptions o;
   o.ground_object_ids = {0};
   // The shadow runs 3 m toward -X, +Y (azimuth 135, zenith 50).
