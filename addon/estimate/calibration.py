@@ -18,7 +18,8 @@ from typing import Iterable, Optional, Sequence, Set, Tuple
 # (support, probability within 2 deg) knots, support ascending; a frame
 # between two knots is interpolated linearly, beyond the ends held.
 SUPPORT_TO_PROBABILITY: Tuple[Tuple[float, float], ...] = (
-    (0.8747, 0.9885),
+    (0.4659, 0.9756),
+    (0.9719, 0.9906),
 )
 
 # Frames the estimate doubted itself (support below DOUBTED_SUPPORT: off
@@ -83,7 +84,7 @@ MODEL_MISFIT_MAX = 0.08
 # development members' frames in clips held by the model rule that were
 # within 2 deg (bench/calibrate.py --write refits it), below 0.5 whatever
 # it measures.
-MODEL_DOUBTED_PROBABILITY = 0.3753
+MODEL_DOUBTED_PROBABILITY = 0.4095
 
 
 def model_misfit(misfits: Iterable[Optional[float]]) -> Optional[float]:
