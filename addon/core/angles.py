@@ -31,6 +31,11 @@ def wrap_signed_deg(angle_deg: Any) -> Any:
         (float(angle_deg) + 180.0) % 360.0 - 180.0
 
 
+def azimuth_difference_deg(a: float, b: float) -> float:
+    """|a - b| wrapped to [0, 180]: how far apart two azimuths are."""
+    return abs(float(wrap_signed_deg(a - b)))
+
+
 def sun_in_world_from_angles(zenith_deg: Any, azimuth_world_deg: Any) -> np.ndarray:
     """Unit vector toward the Sun, (sin z sin a, sin z cos a, cos z); shape
     (..., 3) for array inputs."""

@@ -10,16 +10,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import List, Optional, Sequence, Tuple
 
-from .angles import (angle_between_deg, azimuth_world_from_geographic, sun_in_world_from_angles,
-                     wrap_signed_deg)
+from .angles import (angle_between_deg, azimuth_difference_deg, azimuth_world_from_geographic,
+                     sun_in_world_from_angles)
 from .trackfile import Track
 
 __all__ = ["angle_between_deg", "azimuth_difference_deg", "direction", "evaluate"]
-
-
-def azimuth_difference_deg(a: float, b: float) -> float:
-    """|a - b| wrapped to [0, 180]."""
-    return abs(wrap_signed_deg(a - b))
 
 
 def direction(zenith_deg: float, azimuth_world_deg: float) -> Tuple[float, float, float]:

@@ -453,15 +453,15 @@ def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
 def _height_unpinned(r: "RawFrame") -> bool:
     """Whether a frame's tracked Sun has an elevation its shadows in view
     do not pin (ELEVATION_PINNED_MAX_DEG)."""
-    pinned = getattr(r.tracked, "elevation_pinned_deg", None)  # a moving camera's has none
+    # tracked: a native TrackedFrame, a moving camera's FrameShadow, or None
+    pinned = getattr(r.tracked, "elevation_pinned_deg", None)
     return r.refined and pinned is not None and pinned > ELEVATION_PINNED_MAX_DEG
 
 
 def _azimuth_apart_deg(a, b) -> float:
     """How far apart two Suns' azimuths are (deg, 0-180)."""
-    az_a = angles.angles_from_sun_in_world(a)[1]
-    az_b = angles.angles_from_sun_in_world(b)[1]
-    return abs(float(angles.wrap_signed_deg(az_a - az_b)))
+    return angles.azimuth_difference_deg(angles.angles_from_sun_in_world(a)[1],
+                                         angles.angles_from_sun_in_world(b)[1])
 
 
 def _contrast(tracked: Any) -> float:
@@ -856,13 +856,11 @@ class _WholeClip:
                 for r in frames[lo:hi]:
                     r.segment = s
         for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
-            if not any(tracked[lo:hi]):
-                continue
-            for k in range(lo, hi):  # a hazy Sun in a segment that shows it
-                if frames[k].sunlight == Sunlight.NO and k not in night and \
-                        contrast[k] >= SUNLIT_HAZY_CONTRAST:
-                    frames[k].sunlight = Sunlight.YES
-        for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
+            if any(tracked[lo:hi]):
+                for k in range(lo, hi):  # a hazy Sun in a segment that shows it
+                    if frames[k].sunlight == Sunlight.NO and k not in night and \
+                            contrast[k] >= SUNLIT_HAZY_CONTRAST:
+                        frames[k].sunlight = Sunlight.YES
             if not any(r.sunlight == Sunlight.YES for r in frames[lo:hi]):
                 for r in frames[lo:hi]:  # nothing in the clip shows shadows here
                     r.sunlight = Sunlight.UNKNOWN

@@ -461,9 +461,10 @@ struct ShadowTracker::Impl {
             (std::cos(delta * kDeg) * d + sign * std::sin(delta * kDeg) * up)
                 .normalized();
         // Below the horizon is no Sun: that side is bounded.
-        if (e.z() <= 0.01) continue;
-        if ((Cost(e, scale) - c0) * to_chi2 < kPinChi2) pinned = false;
-        if (!pinned) break;
+        if (e.z() > 0.01 && (Cost(e, scale) - c0) * to_chi2 < kPinChi2) {
+          pinned = false;
+          break;
+        }
       }
       if (pinned) return delta;
     }
