@@ -241,3 +241,30 @@ def test_the_score_splits_raw_suns_by_how_far_their_height_is_pinned(tmp_path):
     table = suite.summary([row])["raw_by_pinned"]
     assert [(step, n, share, wrong) for step, n, share, wrong in table] == \
         [(0.5, 2, 1.0, 0), (90.0, 1, 0.0, 1)]
+
+
+def test_the_score_judges_a_scene_by_both_rules(tmp_path):
+    """bench/suite.py: near the zenith an azimuth 8 deg off is a direction
+    under 1 deg off; the suite's rule (zenith and azimuth) fails the scene,
+    issue 25's (zenith and direction) passes it; a zenith 4 deg off fails
+    both."""
+    trackfile = suite.trackfile
+    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=5.0,
+                                                            azimuth_deg=120.0)
+                                    for i in range(3)])
+    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+
+    def row_for(zenith_off, azimuth_off):
+        estimate = trackfile.Track(frames=[trackfile.FrameEstimate(
+            frame=i + 1, zenith_deg=5.0 + zenith_off, azimuth_deg=120.0 + azimuth_off,
+            confidence=0.9) for i in range(3)])
+        trackfile.write_track(str(tmp_path / "est.sun.json"), estimate)
+        return suite.score("x", str(tmp_path), str(tmp_path / "est.sun.json"), 1.0, None)
+
+    near_zenith = row_for(0.0, 8.0)
+    assert near_zenith["direction_max"] < 1.0 and near_zenith["azimuth_max"] > 3.0
+    assert not near_zenith["passed"] and near_zenith["passed_zenith_direction"]
+    low = row_for(4.0, 0.0)
+    assert not low["passed"] and not low["passed_zenith_direction"]
+    assert row_for(0.2, 0.2)["passed"]
+    assert suite.summary([near_zenith, low])["passed_zenith_direction"] == 1
