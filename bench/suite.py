@@ -313,11 +313,11 @@ def score(key, folder, track_path, wall_s, error):
                measured_share=(track.extra or {}).get("sun_measured_share"),
                model_misfit=(track.extra or {}).get("model_misfit"),
                zenith_bias=zenith_bias(rep))
+
     # Every frame must be estimated: a missing frame fails the scene. The
     # suite's rule judges zenith and azimuth; issue 25's acceptance judges
     # zenith and direction, which an azimuth error near the zenith (a small
     # direction error) does not fail.
-
     def within(*stats):
         return bool(rep.frames_estimated == len(up) and all(
             st and st.mean <= PASS_MEAN_DEG and st.max <= PASS_MAX_DEG for st in stats))
