@@ -268,15 +268,18 @@ def score(key, folder, track_path, wall_s, error):
     by_frame = {f.frame: f for f in track.frames}
     judged = {t.frame for t in up}
     per_frame, night = [], []
+
+    def off_deg(t, zenith_deg, azimuth_deg):
+        """How far a track's Sun (its geographic angles) is from truth frame t's."""
+        return evaluation.angle_between_deg(
+            evaluation.direction(zenith_deg, azimuth_deg + track.north_offset_deg),
+            evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
     for t in truth.frames:
         e = by_frame.get(t.frame)
         if random_scene.no_direct_sun(spec, index[t.frame], t.zenith_deg):
             off = None
             if e is not None and e.has_estimate:
-                off = round(evaluation.angle_between_deg(
-                    evaluation.direction(e.zenith_deg, e.azimuth_deg + track.north_offset_deg),
-                    evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)),
-                    3)
+                off = round(off_deg(t, e.zenith_deg, e.azimuth_deg), 3)
             night.append({"frame": t.frame, "sunlight": e and e.sunlight and e.sunlight.value,
                           "zenith_deg": e and e.zenith_deg, "true_zenith_deg": t.zenith_deg,
                           "why": "night" if t.zenith_deg > 90.0 else "overcast",
@@ -287,16 +290,11 @@ def score(key, folder, track_path, wall_s, error):
             per_frame.append({"frame": t.frame, "error_deg": None,
                               "confidence": None if e is None else e.confidence})
             continue
-        d = evaluation.angle_between_deg(
-            evaluation.direction(e.zenith_deg, e.azimuth_deg + track.north_offset_deg),
-            evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg))
-        row_frame = {"frame": t.frame, "error_deg": round(d, 4), "confidence": e.confidence}
+        row_frame = {"frame": t.frame, "confidence": e.confidence,
+                     "error_deg": round(off_deg(t, e.zenith_deg, e.azimuth_deg), 4)}
         if e.sun_height_pinned_deg is not None and e.raw_zenith_deg is not None:
             row_frame["pinned_deg"] = e.sun_height_pinned_deg
-            row_frame["raw_error_deg"] = round(evaluation.angle_between_deg(
-                evaluation.direction(e.raw_zenith_deg,
-                                     e.raw_azimuth_deg + track.north_offset_deg),
-                evaluation.direction(t.zenith_deg, t.azimuth_deg + truth.north_offset_deg)), 4)
+            row_frame["raw_error_deg"] = round(off_deg(t, e.raw_zenith_deg, e.raw_azimuth_deg), 4)
         per_frame.append(row_frame)
     row["night"] = night
     timing = (track.extra or {}).get("timing", {})
