@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -649,19 +650,26 @@ class _WholeClip:
         opts.ignore_top_rows = self.top
         self.sky = native.SkyEvidence(self.scene, self.work, opts)
         self.mark("table")
+        # The tracker's ground map needs the scene and the camera only: it is
+        # made on the other core while a movie's key frames decode on one.
+        self.tracker = native.ShadowTracker(self.scene, self.work, self.ground_ids,
+                                            ignore_top_rows=self.top)
         reference: List[Optional[np.ndarray]] = []
         kept: Dict[int, np.ndarray] = {}
         independent = getattr(reference_frames, "frames_independent", False)
         budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES or independent else 0
         wanted = set(frames)
-        for f, image in reference_frames:
-            if self.view is not None and self.stream is not None:
-                image = self.view.from_reference_view(f, image)
-            gray = _frame(image)
-            reference.append(gray)
-            if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
-                kept[f], budget = gray, budget - gray.nbytes
-        used = self.sky.set_reference(reference)
+        with ThreadPoolExecutor(max_workers=1) as beside:
+            prepared = beside.submit(self.tracker.prepare)
+            for f, image in reference_frames:
+                if self.view is not None and self.stream is not None:
+                    image = self.view.from_reference_view(f, image)
+                gray = _frame(image)
+                reference.append(gray)
+                if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
+                    kept[f], budget = gray, budget - gray.nbytes
+            used = self.sky.set_reference(reference)
+            prepared.result()
         self.frames_read = len(reference)
         self.mark("reference")
         if used == 0:
@@ -678,8 +686,6 @@ class _WholeClip:
         native, frames = self.native, self.frames
         self.directions = [tuple(d) for d in self.sky.directions.tolist()]
         self.spacing_deg = self.sky.spacing_deg
-        self.tracker = native.ShadowTracker(self.scene, self.work, self.ground_ids,
-                                            ignore_top_rows=self.top)
         rest = [f for f in frames if f not in kept]
         if self.source is None:
             frame_source = native.FrameList([(i, self.reduced(self.read_gray(f), f))

@@ -252,6 +252,10 @@ void BindEstimate(py::module_& m) {
       "ShadowTracker(scene, camera, ground_object_ids, options=None, "
       "**fields of ShadowTrackerOptions).");
   BindTrackerMethods<ShadowTracker>(shadow_tracker);
+  shadow_tracker.def("prepare", &ShadowTracker::Prepare,
+                     py::call_guard<py::gil_scoped_release>(),
+                     "Maps the ground and finds the casters now (else the "
+                     "first initialize does); releases Python's lock.");
   shadow_tracker.def(
       "track_toward",
       [](ShadowTracker& t, const py::object& frame,

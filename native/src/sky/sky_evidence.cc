@@ -43,7 +43,12 @@ SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
   cached_radius_deg_ = std::max(3.0 * spacing_deg_, 22.0);
   cached_.resize(directions_.size());
   const double cos_r = std::cos(cached_radius_deg_ * kDeg);
+  // About this many in the cap (fewer by the horizon): reserved, as a
+  // vector grown by doubling copies itself onto fresh pages.
+  const size_t expected = static_cast<size_t>(
+      1.2 * num_directions * (1.0 - cos_r) / (1.0 - zmin) + 8.0);
   tbb::parallel_for(0, size(), [&](int i) {
+    cached_[i].reserve(expected);
     for (int j = 0; j < size(); ++j) {
       const double c = directions_[i].dot(directions_[j]);
       if (c >= cos_r) {
@@ -264,7 +269,16 @@ struct SkyEvidence::Impl {
     }
     right.resize(s_count);
     for (int i = 0; i < s_count; ++i) right[i] = next[i][0];
-    std::vector<std::vector<int32_t>> band_of(grid.size());
+    // Per direction, its band as it goes into the one array below: per
+    // group with enough samples on both sides, its lit samples then its
+    // shaded ones, each in sample order. Made where the rays are cast (on
+    // every core), each of its exact size: growing vectors' fresh pages cost
+    // more than the bands' own work.
+    struct DirectionBand {
+      std::vector<uint16_t> samples;
+      std::vector<Segment> segments;  // offsets into samples
+    };
+    std::vector<DirectionBand> bands(grid.size());
     const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
     const int steps = o.band_steps;
     tbb::parallel_for(0, grid.size(), [&](int d) {
@@ -303,38 +317,48 @@ struct SkyEvidence::Impl {
           if (j >= 0 && dist[j] < 0) dist[j] = dist[i] + 1, queue.push_back(j);
         }
       }
-      for (int i : queue) band_of[d].push_back(lit[i] ? i : ~i);
-    });
-    // One array for all directions' bands: per direction, per group with
-    // enough samples on both sides, its lit samples then its shaded ones.
-    segments_begin.assign(grid.size() + 1, 0);
-    std::vector<std::vector<int32_t>> lit_of(num_groups), shade_of(num_groups);
-    for (int d = 0; d < grid.size(); ++d) {
-      for (auto& v : lit_of) v.clear();
-      for (auto& v : shade_of) v.clear();
-      for (int32_t e : band_of[d]) {
-        if (e >= 0) {
-          lit_of[group[e]].push_back(e);
-        } else {
-          shade_of[group[~e]].push_back(~e);
-        }
-      }
-      std::vector<int32_t>().swap(band_of[d]);
+      // Counted per group and side, then placed (a counting sort keeps the
+      // queue's order within each side).
+      std::vector<int64_t> place(2 * static_cast<size_t>(num_groups), 0);
+      for (int i : queue) ++place[2 * group[i] + (lit[i] ? 0 : 1)];
+      DirectionBand& out = bands[d];
+      int64_t total = 0;
       for (int g = 0; g < num_groups; ++g) {
-        if (static_cast<int>(lit_of[g].size()) < o.min_side_samples ||
-            static_cast<int>(shade_of[g].size()) < o.min_side_samples)
+        const int64_t nl = place[2 * g], ns = place[2 * g + 1];
+        if (nl < o.min_side_samples || ns < o.min_side_samples) {
+          place[2 * g] = place[2 * g + 1] = -1;
           continue;
-        Segment seg{g, static_cast<int64_t>(band.size()), 0, 0};
-        band.insert(band.end(), lit_of[g].begin(), lit_of[g].end());
-        seg.shade = static_cast<int64_t>(band.size());
-        band.insert(band.end(), shade_of[g].begin(), shade_of[g].end());
-        seg.end = static_cast<int64_t>(band.size());
+        }
+        out.segments.push_back(Segment{g, total, total + nl, total + nl + ns});
+        place[2 * g] = total;
+        place[2 * g + 1] = total + nl;
+        total += nl + ns;
+      }
+      out.samples.resize(static_cast<size_t>(total));
+      for (int i : queue) {
+        int64_t& k = place[2 * group[i] + (lit[i] ? 0 : 1)];
+        if (k >= 0) out.samples[k++] = static_cast<uint16_t>(i);
+      }
+    });
+    // One array for all directions' bands.
+    size_t band_total = 0, segment_total = 0;
+    for (const DirectionBand& b : bands) {
+      band_total += b.samples.size();
+      segment_total += b.segments.size();
+    }
+    band.reserve(band_total);
+    segments.reserve(segment_total);
+    segments_begin.assign(grid.size() + 1, 0);
+    for (int d = 0; d < grid.size(); ++d) {
+      const int64_t offset = static_cast<int64_t>(band.size());
+      band.insert(band.end(), bands[d].samples.begin(), bands[d].samples.end());
+      for (Segment seg : bands[d].segments) {
+        seg.lit += offset, seg.shade += offset, seg.end += offset;
         segments.push_back(seg);
       }
       segments_begin[d + 1] = static_cast<int64_t>(segments.size());
+      std::vector<uint16_t>().swap(bands[d].samples);
     }
-    band.shrink_to_fit();
-    segments.shrink_to_fit();
     in_band.assign(S(), 0);
     for (uint16_t i : band) in_band[i] = 1;
     band_samples = static_cast<int>(

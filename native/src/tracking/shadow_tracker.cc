@@ -104,6 +104,12 @@ struct ShadowTracker::Impl {
   std::vector<int> band_ground;  // per loaded band pixel: its ground index
   std::vector<uint8_t> occluded;
   std::vector<float> lit_origin;  // LitOf's scratch
+  // Initialize's scratch over the whole ground, kept: a run initialises
+  // again on every re-acquisition, and at 1080p each fresh buffer's first
+  // writes (page faults) cost more than filling it.
+  std::vector<float> init_x, init_y, init_sorted;
+  std::vector<uint8_t> init_near_edge;
+  AffineFit init_fit;
   AffineFit fit;
   int64_t rays_cast = 0, evaluations = 0;  // counters of the current frame
 
@@ -700,6 +706,14 @@ ShadowTracker::ShadowTracker(const Scene& scene, const Camera& camera,
 
 ShadowTracker::~ShadowTracker() = default;
 
+void ShadowTracker::Prepare() {
+  Impl& s = *impl_;
+  if (s.mapped) return;
+  s.MapGround();
+  s.casters = internal::FindCasters(s.scene, s.o.ground_object_ids);
+  s.mapped = true;
+}
+
 TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
                                        const Eigen::Vector3d& sun_in_world) {
   Impl& s = *impl_;
@@ -711,13 +725,9 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   TrackedFrame out;
   const Eigen::Vector3d d = sun_in_world.normalized();
   // The ground map and the casters depend on the scene and the camera only:
-  // made on the first call, reused by re-initialisations (a run re-acquires
-  // the Sun tens of times on a hard clip); the albedo is the frame's own.
-  if (!s.mapped) {
-    s.MapGround();
-    s.casters = internal::FindCasters(s.scene, s.o.ground_object_ids);
-    s.mapped = true;
-  }
+  // made once, reused by re-initialisations (a run re-acquires the Sun tens
+  // of times on a hard clip); the albedo is the frame's own.
+  Prepare();
   for (auto& gp : s.ground) gp.albedo = 1.f;
   s.sun = s.sun_before = d;
   s.have_velocity = false;
@@ -733,43 +743,46 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   const Eigen::Vector3f df = d.cast<float>();
   const std::vector<int> all = s.AllGround(1);
   const std::vector<uint8_t> lit = s.LitOf(all, df);
-  std::vector<float> x(all.size()), y(all.size());
-  for (size_t i = 0; i < all.size(); ++i) {
-    x[i] = s.Shading(all[i], df, !lit[i]);
-    y[i] = frame.at<float>(s.ground[all[i]].px);
-  }
   // Ground a moving camera's frame does not see is NaN (view_warp.h): left
-  // out of the fit, its albedo left at 1.
-  std::vector<float> seen_x, seen_y;
+  // out of the fit (its samples first, in x and y), its albedo left at 1.
+  std::vector<float>&x = s.init_x, &y = s.init_y;
+  x.resize(all.size());
+  y.resize(all.size());
+  size_t seen = 0;
   for (size_t i = 0; i < all.size(); ++i) {
-    if (std::isnan(y[i])) continue;
-    seen_x.push_back(x[i]);
-    seen_y.push_back(y[i]);
+    const float v = frame.at<float>(s.ground[all[i]].px);
+    if (std::isnan(v)) continue;
+    x[seen] = s.Shading(all[i], df, !lit[i]);
+    y[seen++] = v;
   }
-  if (seen_y.empty() || seen_y.size() < all.size() * kMinSeenShare) {
+  if (seen == 0 || seen < all.size() * kMinSeenShare) {
     out.reason = "the ground is out of view on this frame";
     return out;
   }
-  std::vector<float> sorted = seen_y;
+  std::vector<float>& sorted = s.init_sorted;
+  sorted.assign(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(seen));
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
                    sorted.end());
   const double scale =
       std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
-  AffineFit fit;
-  RobustAffineFit(static_cast<int>(seen_y.size()), seen_x.data(), seen_y.data(),
-                  nullptr, 1, scale, 4, &fit);
+  AffineFit& fit = s.init_fit;
+  RobustAffineFit(static_cast<int>(seen), x.data(), y.data(), nullptr, 1, scale,
+                  4, &fit);
   std::vector<int> shadowed;
   s.band = s.BandAround(all, df, false, &shadowed, &lit);
   s.FindEdgeCasters(shadowed, d);
   s.frames_since_refresh = 0;
-  cv::Mat1b near_edge(s.H, s.W, uint8_t(0));
-  for (int g : s.band)
-    near_edge(s.ground[g].px) = 1;  // unreliable: lit state uncertain
+  std::vector<uint8_t>& near_edge = s.init_near_edge;  // per ground pixel
+  near_edge.assign(s.ground.size(), 0);
+  for (int g : s.band) near_edge[g] = 1;  // unreliable: lit state uncertain
+  const double a = fit.a[0], b = fit.b[0];
   for (size_t i = 0; i < all.size(); ++i) {
-    const double model = fit.a[0] + fit.b[0] * x[i];
-    if (model > 1e-4 && !std::isnan(y[i]) && !near_edge(s.ground[all[i]].px)) {
-      s.ground[all[i]].albedo =
-          std::clamp(static_cast<float>(y[i] / model), 0.05f, 20.f);
+    const int g = all[i];
+    const float v = frame.at<float>(s.ground[g].px);
+    const double model = a + b * s.Shading(g, df, !lit[i]);
+    if (model > 1e-4 && !std::isnan(v) && !near_edge[g]) {
+      s.ground[g].albedo =
+          std::clamp(static_cast<float>(v / model), 0.05f, 20.f);
     }
   }
   out.contrast =

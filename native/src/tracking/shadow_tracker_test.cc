@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <thread>
 
 #include "sunlapse/initial/initial_sun.h"
 #include "synthetic.h"
@@ -126,6 +128,59 @@ TEST(ShadowTracker, ReinitialisedTrackerTracksAsAFreshOne) {
   EXPECT_EQ(a.rays, b.rays);
   EXPECT_EQ(a.band_pixels, b.band_pixels);
   EXPECT_EQ(a.sun_in_world, b.sun_in_world);
+}
+
+// The run maps the ground on another thread while its reference frames
+// decode: a tracker so prepared tracks as one that maps on its first frame.
+TEST(ShadowTracker, PreparedOnAnotherThreadTracksAsOneThatWasNot) {
+  Fixture fx;
+  const int n = 40;
+  const cv::Mat f0 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
+  const cv::Mat f1 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
+  ShadowTracker plain(fx.scene, fx.cam, fx.Options()),
+      prepared(fx.scene, fx.cam, fx.Options());
+  std::thread beside([&] { prepared.Prepare(); });
+  beside.join();
+  prepared.Prepare();  // once is enough: a second call changes nothing
+  const TrackedFrame a0 = plain.Initialize(f0, PathAt(0, n)),
+                     b0 = prepared.Initialize(f0, PathAt(0, n));
+  ASSERT_TRUE(a0.ok && b0.ok);
+  EXPECT_EQ(a0.band_pixels, b0.band_pixels);
+  EXPECT_EQ(a0.contrast, b0.contrast);
+  const TrackedFrame a = plain.Track(f1), b = prepared.Track(f1);
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_EQ(a.rays, b.rays);
+  EXPECT_EQ(a.sun_in_world, b.sun_in_world);
+}
+
+// A moving camera's frame leaves the ground it does not see NaN: the first
+// frame is fitted on the rest, and tracks as well; with most of the ground
+// unseen it is refused with its reason.
+TEST(ShadowTracker, GroundOutOfViewIsLeftOutOfTheFirstFrame) {
+  Fixture fx;
+  const int n = 40;
+  cv::Mat f0 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
+  const cv::Mat f1 =
+      testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat strip = f0.clone();
+  strip(cv::Rect(0, 0, 40, f0.rows)).setTo(nan);  // the left edge unseen
+  ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
+  const TrackedFrame first = tracker.Initialize(strip, PathAt(0, n));
+  ASSERT_TRUE(first.ok) << first.reason;
+  const TrackedFrame next = tracker.Track(f1);
+  ASSERT_TRUE(next.ok) << next.reason;
+  EXPECT_LT(AngleBetweenDeg(next.sun_in_world, PathAt(1, n)), 0.5);
+
+  cv::Mat blind = f0.clone();
+  blind(cv::Rect(0, 0, f0.cols * 9 / 10, f0.rows)).setTo(nan);
+  ShadowTracker other(fx.scene, fx.cam, fx.Options());
+  const TrackedFrame refused = other.Initialize(blind, PathAt(0, n));
+  EXPECT_FALSE(refused.ok);
+  EXPECT_EQ(refused.reason, "the ground is out of view on this frame");
 }
 
 // A clip with few, far-apart captures: the Sun jumps about 3 deg per frame,

@@ -100,8 +100,14 @@ class ShadowTracker {
                 const ShadowTrackerOptions& options);
   ~ShadowTracker();
 
+  // Maps the ground in view and finds the casters (the scene and camera
+  // alone decide them), unless done already; Initialize does it otherwise.
+  // A run calls it while its reference frames decode, on another thread:
+  // no other call to this tracker may overlap it.
+  void Prepare();
   // First frame (CV_32F linear gray, the camera's size) with the Sun found
-  // by the initial estimate: maps the ground, its albedo and the shadows.
+  // by the initial estimate: maps the ground (Prepare), its albedo and the
+  // shadows.
   TrackedFrame Initialize(const cv::Mat& frame,
                           const Eigen::Vector3d& sun_in_world);
   // The next frame. An empty Mat marks a frame that could not be decoded.
