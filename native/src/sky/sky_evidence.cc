@@ -2,6 +2,7 @@
 #include "sunlapse/common/require.h"
 
 #include "sunlapse/common/angles.h"
+#include "sunlapse/common/huge_pages.h"
 
 #include <algorithm>
 #include <array>
@@ -47,9 +48,24 @@ SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
   // vector grown by doubling copies itself onto fresh pages.
   const size_t expected = static_cast<size_t>(
       1.2 * num_directions * (1.0 - cos_r) / (1.0 - zmin) + 8.0);
+  // The spiral runs from the zenith down (z falls with the index), and a
+  // direction within r of another is within r of it in zenith: each one
+  // scans only the indices of that zenith band (a margin keeps it a
+  // superset; the dot product decides as before).
+  const double r = cached_radius_deg_ * kDeg + 1e-6;
+  auto first_below = [&](double z) {  // the first index whose z is below
+    return static_cast<int>(
+        std::partition_point(
+            directions_.begin(), directions_.end(),
+            [z](const Eigen::Vector3d& v) { return v.z() >= z; }) -
+        directions_.begin());
+  };
   tbb::parallel_for(0, size(), [&](int i) {
     cached_[i].reserve(expected);
-    for (int j = 0; j < size(); ++j) {
+    const double zenith = std::acos(std::clamp(directions_[i].z(), -1.0, 1.0));
+    const int j0 = first_below(std::cos(std::max(0.0, zenith - r)) + 1e-12);
+    const int j1 = first_below(std::cos(std::min(M_PI, zenith + r)) - 1e-12);
+    for (int j = j0; j < j1; ++j) {
       const double c = directions_[i].dot(directions_[j]);
       if (c >= cos_r) {
         cached_[i].push_back(
@@ -346,7 +362,7 @@ struct SkyEvidence::Impl {
       band_total += b.samples.size();
       segment_total += b.segments.size();
     }
-    band.reserve(band_total);
+    ReserveHuge(&band, band_total);
     segments.reserve(segment_total);
     segments_begin.assign(grid.size() + 1, 0);
     for (int d = 0; d < grid.size(); ++d) {

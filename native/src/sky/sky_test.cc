@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -52,6 +53,32 @@ std::vector<cv::Mat> Spread(const std::vector<cv::Mat>& frames, int k) {
   for (int i = 0; i < k; ++i)
     out.push_back(frames[i * (frames.size() - 1) / std::max(1, k - 1)]);
   return out;
+}
+
+// Each direction's cached neighbours are found in a zenith band around it:
+// they must be exactly those a scan of the whole sky finds, nearest first.
+TEST(SkyGrid, CachedNeighboursAreThoseOfAScanOfTheWholeSky) {
+  for (const auto& [n, max_zenith] : std::vector<std::pair<int, double>>{
+           {3000, 90.0}, {400, 60.0}, {16, 90.0}}) {
+    const SkyGrid grid(n, max_zenith);
+    const double cos_r = std::cos(grid.cached_radius_deg() * M_PI / 180.0);
+    for (int i = 0; i < grid.size(); ++i) {
+      std::vector<int> scanned;
+      for (int j = 0; j < grid.size(); ++j) {
+        if (grid.direction(i).dot(grid.direction(j)) >= cos_r)
+          scanned.push_back(j);
+      }
+      std::vector<int> cached;
+      float last = -1.f;
+      for (const SkyGrid::Neighbour& nb : grid.Cached(i)) {
+        cached.push_back(nb.index);
+        EXPECT_GE(nb.angle_deg, last);
+        last = nb.angle_deg;
+      }
+      std::sort(cached.begin(), cached.end());
+      ASSERT_EQ(cached, scanned) << n << " directions, direction " << i;
+    }
+  }
 }
 
 TEST(SkyEvidence, BestDirectionOfEachFrameIsNearTheTrueSunDespiteAGradient) {

@@ -11,6 +11,7 @@
 
 #include "casters.h"
 #include "sunlapse/common/angles.h"
+#include "sunlapse/common/huge_pages.h"
 #include "sunlapse/common/robust_fit.h"
 
 namespace sunlapse {
@@ -123,10 +124,12 @@ struct ShadowTracker::Impl {
   }
 
   void MapGround() {
-    ground_index = cv::Mat1i(H, W, -1);
+    ground_index.create(H, W);
+    AdviseHugePages(ground_index.data, ground_index.total() * sizeof(int));
+    ground_index.setTo(-1);
     const int y0 = o.ignore_top_rows, y1 = H - o.ignore_bottom_rows;
     const float lift = scene.surface_offset();
-    ground.reserve(static_cast<size_t>(std::max(0, y1 - y0)) * W);
+    ReserveHuge(&ground, static_cast<size_t>(std::max(0, y1 - y0)) * W);
     // A few rows at a time: the rays' buffers stay small and warm.
     constexpr int kRows = 16;
     std::vector<double> px;
@@ -152,6 +155,8 @@ struct ShadowTracker::Impl {
         ground.push_back(gp);
       }
     }
+    ReserveHuge(&tag, ground.size());
+    ReserveHuge(&slot, ground.size());
     tag.assign(ground.size(), 0);
     slot.assign(ground.size(), 0);
   }
@@ -182,6 +187,7 @@ struct ShadowTracker::Impl {
     // The origins' buffer is kept: the whole ground's is megabytes, and
     // fresh pages cost more than the copy.
     std::vector<float>& org = lit_origin;
+    ReserveHuge(&org, 3 * ids.size());
     org.resize(3 * ids.size());
     for (size_t i = 0; i < ids.size(); ++i) {
       for (int k = 0; k < 3; ++k) org[3 * i + k] = ground[ids[i]].origin[k];
@@ -746,6 +752,8 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   // Ground a moving camera's frame does not see is NaN (view_warp.h): left
   // out of the fit (its samples first, in x and y), its albedo left at 1.
   std::vector<float>&x = s.init_x, &y = s.init_y;
+  ReserveHuge(&x, all.size());
+  ReserveHuge(&y, all.size());
   x.resize(all.size());
   y.resize(all.size());
   size_t seen = 0;
@@ -760,12 +768,14 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
     return out;
   }
   std::vector<float>& sorted = s.init_sorted;
+  ReserveHuge(&sorted, seen);
   sorted.assign(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(seen));
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
                    sorted.end());
   const double scale =
       std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
   AffineFit& fit = s.init_fit;
+  ReserveHuge(&fit.residual, seen);
   RobustAffineFit(static_cast<int>(seen), x.data(), y.data(), nullptr, 1, scale,
                   4, &fit);
   std::vector<int> shadowed;
