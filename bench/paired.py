@@ -15,7 +15,15 @@ apart and share the machine's state.
 Printed: per figure the minimum, median and maximum of A, of B and of A/B.
 The commands' exit codes are printed; a command that fails is not timed
 again (exit 1). Figures only: nothing is judged.
+
+  --tracks A.json B.json [--keys table_s,reference_s,tracker_start_s]
+
+also reads, after each run, the track file each command wrote (its
+`timing`, docs/track-format.md) and prints the same three figures for each
+key and for their sum: the estimate's own clock for its steps, e.g. the
+fixed costs of issue 28 (the default keys).
 """
+import json
 import argparse
 import os
 import shlex
@@ -46,7 +54,15 @@ def main(argv=None):
     p.add_argument("--warmup", type=int, default=1, help="pairs run first, not counted (default 1)")
     p.add_argument("--a", required=True, help="command A, one string")
     p.add_argument("--b", required=True, help="command B, one string")
+    p.add_argument("--tracks", nargs=2, metavar=("A_JSON", "B_JSON"),
+                   help="the track files the commands write: their timing keys are printed too")
+    p.add_argument("--keys", default="table_s,reference_s,tracker_start_s",
+                   help="with --tracks: timing keys printed, and their sum "
+                        "(default table_s,reference_s,tracker_start_s)")
     args = p.parse_args(argv)
+    keys = [k for k in args.keys.split(",") if k]
+    if args.tracks and not keys:
+        p.error("--keys: name at least one timing key")
     if args.n < 1:
         p.error(f"-n must be at least 1, got {args.n}")
     if args.warmup < 0:
@@ -56,6 +72,8 @@ def main(argv=None):
         if not cmd:
             p.error(f"--{name.lower()}: empty command")
     figures = {"A": [], "B": []}
+    steps: dict = {"A": [], "B": []}
+    tracks = dict(zip(("A", "B"), args.tracks or ()))
     for i in range(args.warmup + args.n):
         for name, cmd in commands.items():
             try:
@@ -69,6 +87,12 @@ def main(argv=None):
                 return 1
             if i >= args.warmup:
                 figures[name].append((wall, cpu, peak))
+                if tracks:
+                    got = _timing(tracks[name], keys)
+                    if isinstance(got, str):
+                        print(f"paired: command {name}: {got}", file=sys.stderr)
+                        return 1
+                    steps[name].append(got)
     print(f"{args.n} pairs after {args.warmup} warm-up pair(s) on {os.cpu_count()} CPUs "
           f"(min median max)")
     for k, what in enumerate(("wall s", "cpu s", "peak MB")):
@@ -76,7 +100,29 @@ def main(argv=None):
         b = [f[k] for f in figures["B"]]
         ratio = [x / y for x, y in zip(a, b)]
         print(f"{what:7s} A {spread(a)}   B {spread(b)}   A/B {spread(ratio)}")
+    if tracks:
+        width = max(len(k) for k in keys + ["sum of keys"])
+        for k, what in enumerate(keys + ["sum of keys"]):
+            a = [f[k] for f in steps["A"]]
+            b = [f[k] for f in steps["B"]]
+            ratio = [x / y if y else float("nan") for x, y in zip(a, b)]
+            print(f"{what:{width}s} A {spread(a)}   B {spread(b)}   A/B {spread(ratio)}")
     return 0
+
+
+def _timing(path, keys):
+    """The keys' values in the track file's timing, and their sum; or why
+    not (a message naming the file or the key)."""
+    try:
+        with open(path) as f:
+            timing = json.load(f).get("timing") or {}
+    except (OSError, ValueError) as e:
+        return f"cannot read the track {path}: {e}"
+    missing = [k for k in keys if not isinstance(timing.get(k), (int, float))]
+    if missing:
+        return f"the track {path} has no timing {', '.join(missing)}"
+    values = [float(timing[k]) for k in keys]
+    return values + [sum(values)]
 
 
 if __name__ == "__main__":
