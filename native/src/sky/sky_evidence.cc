@@ -20,6 +20,8 @@ namespace sunlapse {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+// Samples a table may hold: the bands index them in 16 bits.
+constexpr int64_t kMaxSamples = 65536;
 
 double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
@@ -209,9 +211,17 @@ struct SkyEvidence::Impl {
     Require(covered > 0,
             "the camera sees no model surface: check the camera and the model");
     const double area = double(covered) * probe * probe;
-    const int stride = std::max(
+    int stride = std::max(
         1, static_cast<int>(std::floor(std::sqrt(area / o.max_samples))));
     cast(stride, &px, &hits);
+    // The bands hold sample indices in 16 bits; the stride's rounding may
+    // give up to four times max_samples.
+    auto count = [&] {
+      int64_t c = 0;
+      for (size_t i = 0; i < hits.object_id.size(); ++i) c += hits.hit(i);
+      return c;
+    };
+    while (count() > kMaxSamples) cast(++stride, &px, &hits);
 
     const float lift = scene.surface_offset();
     std::vector<Eigen::Vector3f> origin, normal;
