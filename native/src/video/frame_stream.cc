@@ -47,6 +47,9 @@ struct FrameStream::Impl {
   size_t taken = 0;    // frames a decoding thread has started on
   size_t queued = 0;   // frames put in the queue (in order)
   int last_near = -1;  // the last frame decoded (near: never twice)
+  // Near, with enough key frames: the indices are distinct key frames, each
+  // decoded alone after a seek, so several readers share them out.
+  bool keys_only = false;
   bool stop = false;
   double wait_seconds = 0.0;
   int decoders = 1;  // decoding threads (set before any starts)
@@ -85,8 +88,15 @@ struct FrameStream::Impl {
     f.index = index;
     // Near: the key frame before the index when it is one not handed out
     // yet (one decode after a seek), else the exact frame.
-    const int key = near ? r.KeyFrameAtOrBefore(index) : -1;
-    if (key > last_near) {
+    const int key = near && !keys_only ? r.KeyFrameAtOrBefore(index) : -1;
+    if (keys_only) {
+      f.index = r.SeekNear(index);
+      if (f.index < 0) {
+        f.message = "the clip has no frame " + std::to_string(index + 1);
+        f.index = index;
+        return f;
+      }
+    } else if (key > last_near) {
       f.index = r.SeekNear(key);
       if (f.index < 0) {
         f.message = "the clip has no frame " + std::to_string(index + 1);
@@ -110,7 +120,7 @@ struct FrameStream::Impl {
       return f;
     }
     f.report = r.last_frame();
-    if (near) last_near = std::max(last_near, f.index);
+    if (near && !keys_only) last_near = std::max(last_near, f.index);
     if (gray8.empty()) {
       f.status = StreamedFrame::Status::kUnusable;
       f.message =
@@ -165,21 +175,40 @@ struct FrameStream::Impl {
 
   void Start() {
     // An image sequence's frames decode side by side, each thread with its
-    // own reader; a movie's in one thread (its decoder has threads).
+    // own reader; so do a movie's lone key frames (a decoder's frame threads
+    // give one frame a single core). Other movies' frames in one thread: its
+    // decoder has threads.
     int n = 1;
-    if (reader.is_sequence()) {
+    if (reader.is_sequence() || keys_only) {
       const int cores =
           std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
       n = options.decode_threads > 0 ? options.decode_threads : cores;
       n = std::max(1, std::min<int>(n, static_cast<int>(indices.size())));
     }
     decoders = n;
+    const bool near = options.near && (n == 1 || keys_only);
+    threads.emplace_back([this, near] { Run(reader, near); });
+    if (!reader.is_sequence()) {
+      // A movie's other readers open on their own threads (a probe and a
+      // first frame each): the first decodes meanwhile. One that cannot
+      // open leaves its share to the others.
+      for (int t = 1; t < n; ++t) {
+        threads.emplace_back([this, near] {
+          std::unique_ptr<VideoReader> own;
+          try {
+            own = std::make_unique<VideoReader>(path, !options.keep_bgr);
+          } catch (const std::exception&) {
+            return;
+          }
+          Run(*own, near);
+        });
+      }
+      return;
+    }
     extra_readers.reserve(n - 1);
     for (int t = 1; t < n; ++t)
       extra_readers.push_back(
           std::make_unique<VideoReader>(path, !options.keep_bgr));
-    const bool near = options.near && n == 1;
-    threads.emplace_back([this, near] { Run(reader, near); });
     for (auto& r : extra_readers) {
       VideoReader* own = r.get();
       threads.emplace_back([this, own] { Run(*own, false); });
@@ -204,8 +233,10 @@ FrameStream::FrameStream(const std::string& path, std::vector<int> indices,
       if (key >= 0 && std::find(keys.begin(), keys.end(), key) == keys.end())
         keys.push_back(key);
     }
-    if (known && static_cast<int>(keys.size()) >= options.near_min_frames)
+    if (known && static_cast<int>(keys.size()) >= options.near_min_frames) {
       impl_->indices = keys;
+      impl_->keys_only = true;
+    }
   }
   impl_->Start();
 }
