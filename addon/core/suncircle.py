@@ -67,10 +67,19 @@ def _basis(pole_zenith, pole_azimuth):
     return p, e1, e2
 
 
-def _model(params, t, rate):
+def _model(params, t, rate, bases=None):
+    """The Sun on the circle at times t. `bases`: a dict the pole's bases
+    are kept in, by the pole's angles (a fit's Jacobian moves the other
+    parameters four times out of six; the basis is most of the cost)."""
     pz, pa, dec, h0 = params[:4]
     r = params[4] if rate is None else rate
-    p, e1, e2 = _basis(pz, pa)
+    if bases is None:
+        p, e1, e2 = _basis(pz, pa)
+    else:
+        key = (float(pz), float(pa))
+        if key not in bases:
+            bases[key] = _basis(pz, pa)
+        p, e1, e2 = bases[key]
     h = h0 + r * t
     return (math.cos(dec) * (np.cos(h)[:, None] * e1 + np.sin(h)[:, None] * e2)
             + math.sin(dec) * p[None, :])
@@ -125,9 +134,10 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
         params = np.array([pz, pa, dec, float(np.median(hs - rate * tw))])
     robust = np.ones(len(tw))
     lam: float = 1e-3
+    bases: dict = {}
 
     def residuals(pr):
-        return ((_model(pr, tw, rate) - s) * np.sqrt(ww * robust)[:, None]).ravel()
+        return ((_model(pr, tw, rate, bases) - s) * np.sqrt(ww * robust)[:, None]).ravel()
 
     for it in range(iterations):
         r0 = residuals(params)
