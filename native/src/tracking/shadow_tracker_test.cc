@@ -51,6 +51,12 @@ Eigen::Vector3d PathAt(int f, int n) {
   return Sun(55 - 15 * t, 120 + 30 * t);
 }
 
+// Frame f of a 40-frame clip along the path, over the textured ground.
+cv::Mat PathFrame(const Fixture& fx, int f) {
+  return testing::RenderLambertian(fx.scene, fx.cam, PathAt(f, 40),
+                                   Textured(f + 1));
+}
+
 TEST(ShadowTracker, FollowsRotatingAndShorteningShadowsWithinHalfADegree) {
   Fixture fx;
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
@@ -111,12 +117,9 @@ TEST(ShadowTracker, InitializeContrastPrefersTheTrueSun) {
 TEST(ShadowTracker, ReinitialisedTrackerTracksAsAFreshOne) {
   Fixture fx;
   const int n = 40;
-  const cv::Mat f0 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
-  const cv::Mat f1 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
-  const cv::Mat f2 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(2, n), Textured(3));
+  const cv::Mat f0 = PathFrame(fx, 0);
+  const cv::Mat f1 = PathFrame(fx, 1);
+  const cv::Mat f2 = PathFrame(fx, 2);
   ShadowTracker fresh(fx.scene, fx.cam, fx.Options()),
       again(fx.scene, fx.cam, fx.Options());
   ASSERT_TRUE(fresh.Initialize(f1, PathAt(1, n)).ok);
@@ -135,10 +138,8 @@ TEST(ShadowTracker, ReinitialisedTrackerTracksAsAFreshOne) {
 TEST(ShadowTracker, PreparedOnAnotherThreadTracksAsOneThatWasNot) {
   Fixture fx;
   const int n = 40;
-  const cv::Mat f0 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
-  const cv::Mat f1 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
+  const cv::Mat f0 = PathFrame(fx, 0);
+  const cv::Mat f1 = PathFrame(fx, 1);
   ShadowTracker plain(fx.scene, fx.cam, fx.Options()),
       prepared(fx.scene, fx.cam, fx.Options());
   std::thread beside([&] { prepared.Prepare(); });
@@ -161,10 +162,8 @@ TEST(ShadowTracker, PreparedOnAnotherThreadTracksAsOneThatWasNot) {
 TEST(ShadowTracker, GroundOutOfViewIsLeftOutOfTheFirstFrame) {
   Fixture fx;
   const int n = 40;
-  cv::Mat f0 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(0, n), Textured(1));
-  const cv::Mat f1 =
-      testing::RenderLambertian(fx.scene, fx.cam, PathAt(1, n), Textured(2));
+  const cv::Mat f0 = PathFrame(fx, 0);
+  const cv::Mat f1 = PathFrame(fx, 1);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   cv::Mat strip = f0.clone();
   strip(cv::Rect(0, 0, 40, f0.rows)).setTo(nan);  // the left edge unseen
