@@ -185,6 +185,43 @@ TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
   EXPECT_EQ(got, (std::vector<int>{0, 30, 90}));
 }
 
+// A long-GOP movie's key frames (near, enough of them) are shared out
+// among several readers: in the order asked, each exactly what one reader
+// decodes.
+TEST(FrameStream, SharesAMoviesKeyFramesAmongReadersInOrder) {
+  const Sequence seq("keys", 1);  // for its folder
+  const std::string movie = seq.Path(0) + ".mp4";
+  // 240 frames whose blue channel is their index, a key frame every 10.
+  const std::string cmd =
+      "ffmpeg -v error -y -f lavfi -i \"color=c=black:s=32x24:r=25:d=9.6,"
+      "geq=r=0:g=0:b='N'\" -c:v libx264 -g 10 -keyint_min 10 "
+      "-sc_threshold 0 -pix_fmt yuv444p " +
+      movie + " >/dev/null 2>&1";
+  if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no ffmpeg with libx264";
+  std::vector<int> indices;
+  for (int i = 0; i < 24; ++i) indices.push_back(10 * i + 3);
+  auto read_all = [&](int threads) {
+    FrameStreamOptions o;
+    o.near = true;
+    o.decode_threads = threads;
+    o.queue_frames = 2;
+    FrameStream s(movie, indices, o);
+    std::vector<std::pair<int, float>> got;
+    StreamedFrame f;
+    while (s.Next(&f)) {
+      EXPECT_EQ(f.status, StreamedFrame::Status::kOk) << f.message;
+      got.emplace_back(f.index, f.gray.empty() ? -1.f : f.gray.at<float>(5, 5));
+    }
+    return got;
+  };
+  const auto one = read_all(1), three = read_all(3);
+  ASSERT_EQ(one.size(), 24u);
+  for (int i = 0; i < 24; ++i) EXPECT_EQ(one[i].first, 10 * i) << i;
+  EXPECT_EQ(three, one);
+  // Each key frame's own picture: frame 10 i is brighter than 10 (i - 1).
+  for (int i = 1; i < 24; ++i) EXPECT_GT(one[i].second, one[i - 1].second) << i;
+}
+
 TEST(FrameStream, DecodesASequenceOnSeveralThreadsInOrder) {
   // Stills are independent: several threads decode them side by side, and
   // the frames still come out in the order asked, each exactly what one
