@@ -153,17 +153,25 @@ TEST(FrameStream, SaysWhyAFrameIsMissingAndGoesOn) {
   EXPECT_FALSE(s.Next(&f));
 }
 
+// An H.264 movie at 25 frames/s whose frame N has blue `blue_per_frame` x N,
+// with a key frame every `gop`; false without ffmpeg and libx264.
+bool MakeMovie(const std::string& path, int frames, int gop,
+               int blue_per_frame) {
+  const std::string g = std::to_string(gop);
+  const std::string cmd =
+      "ffmpeg -v error -y -f lavfi -i \"color=c=black:s=32x24:r=25:d=" +
+      std::to_string(frames / 25.0) + ",geq=r=0:g=0:b='" +
+      std::to_string(blue_per_frame) + "*N'\" -c:v libx264 -g " + g +
+      " -keyint_min " + g + " -sc_threshold 0 -pix_fmt yuv444p " + path +
+      " >/dev/null 2>&1";
+  return std::system(cmd.c_str()) == 0;
+}
+
 TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
   const Sequence seq("near", 1);  // for its folder
-  const std::string src = seq.Path(0);
-  const std::string movie = src + ".mp4";
   // 120 frames whose blue channel is 2 x their index, a key frame every 30.
-  const std::string cmd =
-      "ffmpeg -v error -y -f lavfi -i \"color=c=black:s=32x24:r=25:d=4.8,"
-      "geq=r=0:g=0:b='2*N'\" -c:v libx264 -g 30 -keyint_min 30 "
-      "-sc_threshold 0 -pix_fmt yuv444p " +
-      movie + " >/dev/null 2>&1";
-  if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no ffmpeg with libx264";
+  const std::string movie = seq.Path(0) + ".mp4";
+  if (!MakeMovie(movie, 120, 30, 2)) GTEST_SKIP() << "no ffmpeg with libx264";
   FrameStreamOptions o;
   o.near = true;
   o.near_min_frames = 8;  // 4 distinct key frames: not enough
@@ -190,14 +198,9 @@ TEST(FrameStream, NearFramesAreNewKeyFramesElseExact) {
 // decodes.
 TEST(FrameStream, SharesAMoviesKeyFramesAmongReadersInOrder) {
   const Sequence seq("keys", 1);  // for its folder
-  const std::string movie = seq.Path(0) + ".mp4";
   // 240 frames whose blue channel is their index, a key frame every 10.
-  const std::string cmd =
-      "ffmpeg -v error -y -f lavfi -i \"color=c=black:s=32x24:r=25:d=9.6,"
-      "geq=r=0:g=0:b='N'\" -c:v libx264 -g 10 -keyint_min 10 "
-      "-sc_threshold 0 -pix_fmt yuv444p " +
-      movie + " >/dev/null 2>&1";
-  if (std::system(cmd.c_str()) != 0) GTEST_SKIP() << "no ffmpeg with libx264";
+  const std::string movie = seq.Path(0) + ".mp4";
+  if (!MakeMovie(movie, 240, 10, 1)) GTEST_SKIP() << "no ffmpeg with libx264";
   std::vector<int> indices;
   for (int i = 0; i < 24; ++i) indices.push_back(10 * i + 3);
   auto read_all = [&](int threads) {
