@@ -14,6 +14,7 @@
 #include <tuple>
 #include <utility>
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 namespace sunlapse {
@@ -307,27 +308,39 @@ struct SkyEvidence::Impl {
     std::vector<DirectionBand> bands(grid.size());
     const float far = 10.f * scene.bounds().diagonal().norm() + 1.f;
     const int steps = o.band_steps;
+    // Each thread's buffers, reused from one direction to the next.
+    struct Scratch {
+      std::vector<int> facing, dist, queue;
+      std::vector<float> from;
+      std::vector<uint8_t> occluded, lit;
+      std::vector<int64_t> place;
+    };
+    tbb::enumerable_thread_specific<Scratch> scratch;
     tbb::parallel_for(0, grid.size(), [&](int d) {
+      Scratch& w = scratch.local();
       const Eigen::Vector3f dir = grid.direction(d).cast<float>();
       // Only samples facing the direction can be lit: the others cast no
       // ray (a wall faces away from half the sky).
-      std::vector<int> facing;
-      std::vector<float> from;
-      facing.reserve(s_count);
-      from.reserve(3 * static_cast<size_t>(s_count));
+      w.facing.resize(s_count);
+      w.from.resize(3 * static_cast<size_t>(s_count));
+      size_t facing = 0;
       for (int i = 0; i < s_count; ++i) {
         if (normal[i].dot(dir) <= 0.02f) continue;
-        facing.push_back(i);
-        from.insert(from.end(), flat.begin() + 3 * i, flat.begin() + 3 * i + 3);
+        w.facing[facing] = i;
+        std::copy_n(flat.begin() + 3 * i, 3, w.from.begin() + 3 * facing);
+        ++facing;
       }
-      std::vector<uint8_t> occluded(facing.size());
-      scene.OccludedToward(static_cast<int64_t>(facing.size()), from.data(),
-                           dir, 0.f, far, occluded.data());
-      std::vector<uint8_t> lit(s_count, 0);
-      for (size_t k = 0; k < facing.size(); ++k) lit[facing[k]] = !occluded[k];
+      w.occluded.resize(facing);
+      scene.OccludedToward(static_cast<int64_t>(facing), w.from.data(), dir,
+                           0.f, far, w.occluded.data());
+      std::vector<uint8_t>& lit = w.lit;
+      lit.assign(s_count, 0);
+      for (size_t k = 0; k < facing; ++k) lit[w.facing[k]] = !w.occluded[k];
       // Boundary samples (in sample order), then grown by `steps` grid
       // steps within the group.
-      std::vector<int> dist(s_count, -1), queue;
+      std::vector<int>&dist = w.dist, &queue = w.queue;
+      dist.assign(s_count, -1);
+      queue.clear();
       for (int i = 0; i < s_count; ++i) {
         for (int32_t j : next[i]) {
           if (j >= 0 && lit[j] != lit[i]) dist[i] = dist[j] = 0;
@@ -345,7 +358,8 @@ struct SkyEvidence::Impl {
       }
       // Counted per group and side, then placed (a counting sort keeps the
       // queue's order within each side).
-      std::vector<int64_t> place(2 * static_cast<size_t>(num_groups), 0);
+      std::vector<int64_t>& place = w.place;
+      place.assign(2 * static_cast<size_t>(num_groups), 0);
       for (int i : queue) ++place[2 * group[i] + (lit[i] ? 0 : 1)];
       DirectionBand& out = bands[d];
       int64_t total = 0;
