@@ -22,7 +22,9 @@ TEST(AdviseHugePages, AdvisesOnlyTheWholeHugePagesInside) {
   EXPECT_EQ(advised % kHuge, 0u);
   EXPECT_LE(advised, big.size());
 #if defined(__linux__)
-  if (advised != 0) EXPECT_GE(advised, 4 * kHuge);
+  if (advised != 0) {
+    EXPECT_GE(advised, 4 * kHuge);
+  }
 #endif
   for (size_t i = 0; i < big.size(); i += 4096) ASSERT_EQ(big[i], 3);
 }

@@ -156,7 +156,7 @@ TEST(Camera, ResizedMapsPixelsAsOpenCvsResize) {
   const Camera cam = Camera::FromBlender(p);
   const Camera half = cam.Resized(320, 240);
   EXPECT_EQ(half.width(), 320);
-  for (const Eigen::Vector3d point :
+  for (const Eigen::Vector3d& point :
        {Eigen::Vector3d(0.3, -0.2, 0.0), Eigen::Vector3d(-1.0, 0.7, 1.0)}) {
     Eigen::Vector2d full, small;
     ASSERT_TRUE(cam.WorldToPixel(point, &full));
