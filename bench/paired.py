@@ -23,8 +23,8 @@ also reads, after each run, the track file each command wrote (its
 key and for their sum: the estimate's own clock for its steps, e.g. the
 fixed costs of issue 28 (the default keys).
 """
-import json
 import argparse
+import json
 import os
 import shlex
 import statistics

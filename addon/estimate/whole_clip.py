@@ -631,9 +631,10 @@ class _WholeClip:
     def sky_table_and_reference(self) -> Optional[Dict[int, np.ndarray]]:
         """The visibility table over the whole sky, cast while the reference
         frames spread over the clip are decoded ahead; their levels set each
-        surface sample's reference. Returns the reference frames that are
-        frames of a short run, kept for the pass ({frame: gray}), or None
-        when no frame could be read."""
+        surface sample's reference. The tracker is made here too, its ground
+        map beside the reference decoding (ShadowTracker.prepare). Returns
+        the reference frames that are frames of a short run, kept for the
+        pass ({frame: gray}), or None when no frame could be read."""
         native, frames = self.native, self.frames
         wanted_reference = [frames[i] for i in notes.spread(list(range(self.n)), REFERENCE_FRAMES)]
         size = (self.work.width, self.work.height)

@@ -207,8 +207,12 @@ struct SkyEvidence::Impl {
     Hits hits;
     const int probe = std::max(1, std::min(W, y1 - y0) / 64);
     cast(probe, &px, &hits);
-    int64_t covered = 0;
-    for (size_t i = 0; i < hits.object_id.size(); ++i) covered += hits.hit(i);
+    auto count = [&] {  // samples that hit the model
+      int64_t c = 0;
+      for (size_t i = 0; i < hits.object_id.size(); ++i) c += hits.hit(i);
+      return c;
+    };
+    const int64_t covered = count();
     Require(covered > 0,
             "the camera sees no model surface: check the camera and the model");
     const double area = double(covered) * probe * probe;
@@ -217,11 +221,6 @@ struct SkyEvidence::Impl {
     cast(stride, &px, &hits);
     // The bands hold sample indices in 16 bits; the stride's rounding may
     // give up to four times max_samples.
-    auto count = [&] {
-      int64_t c = 0;
-      for (size_t i = 0; i < hits.object_id.size(); ++i) c += hits.hit(i);
-      return c;
-    };
     while (count() > kMaxSamples) cast(++stride, &px, &hits);
 
     const float lift = scene.surface_offset();

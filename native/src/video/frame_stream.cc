@@ -190,34 +190,21 @@ struct FrameStream::Impl {
     decoders = n;
     const bool near = options.near && (n == 1 || keys_only);
     threads.emplace_back([this, near] { Run(reader, near); });
-    if (!reader.is_sequence()) {
-      // A movie's other readers open on their own threads (a probe and a
-      // first frame each): the first decodes meanwhile. One that cannot
-      // open leaves its share to the others.
-      for (int t = 1; t < n; ++t) {
-        threads.emplace_back([this, near] {
-          std::unique_ptr<VideoReader> own;
-          try {
-            own = std::make_unique<VideoReader>(path, !options.keep_bgr);
-          } catch (const std::exception&) {
-            return;
-          }
-          Run(*own, near);
-        });
-      }
-      return;
-    }
-    extra_readers.reserve(n - 1);
-    for (int t = 1; t < n; ++t)
-      extra_readers.push_back(
-          std::make_unique<VideoReader>(path, !options.keep_bgr));
-    for (auto& r : extra_readers) {
-      VideoReader* own = r.get();
-      threads.emplace_back([this, own] { Run(*own, false); });
+    // The other readers open on their own threads (a movie's: a probe and a
+    // first frame each), the first decoding meanwhile. One that cannot open
+    // leaves its share to the others.
+    for (int t = 1; t < n; ++t) {
+      threads.emplace_back([this, near] {
+        std::unique_ptr<VideoReader> own;
+        try {
+          own = std::make_unique<VideoReader>(path, !options.keep_bgr);
+        } catch (const std::exception&) {
+          return;
+        }
+        Run(*own, near);
+      });
     }
   }
-
-  std::vector<std::unique_ptr<VideoReader>> extra_readers;
 };
 
 FrameStream::FrameStream(const std::string& path, std::vector<int> indices,
