@@ -87,6 +87,11 @@ def build_parser():
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
+    p.add_argument("--refine-model", action="store_true",
+                   help="refine the hand-made model by the clip first: each object moved, "
+                        "turned and scaled and the camera turned and zoomed so that the "
+                        "model's edges fall on the footage's; the estimate uses the refined "
+                        "model and the track lists the corrections (the .blend is not changed)")
     p.add_argument("--uncalibrated-confidence", action="store_true",
                    help="write each frame's support as the estimator computes it instead of "
                         "the probability of being within 2 deg; for refitting that "
@@ -366,6 +371,7 @@ def _run(argv, interrupt):
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)
         options.calibrated_confidence = not args.uncalibrated_confidence
+        options.refine_model = args.refine_model
         interrupt.check()
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "

@@ -6,7 +6,7 @@
                          [--no-times] [--seeds 1,2,5-9,rough1-6] [--jobs J]
                          [--estimator-only] [--smoothings two_pass,physical]
                          [--method default] [--cache DIR] [--out FIGURES.json]
-                         [--uncalibrated-confidence]
+                         [--uncalibrated-confidence] [--refine-model]
 
 Scenes: the fixed members of examples/random_scene.py (the plaza of issue 14,
 twice) and random seeds 1, 2, ... up to --scenes in all (default 32; every
@@ -53,7 +53,7 @@ Each scene's scene.blend is then run exactly as a user would:
           --smoothing S
 (no --ground: the ground is found by the add-on; --times CSV for the
 multi-day members; --uncalibrated-confidence when asked, for
-bench/calibrate.py). Frames are judged where the Sun is at least 4 deg up
+bench/calibrate.py; --refine-model when asked). Frames are judged where the Sun is at least 4 deg up
 (and, in an overcast run, where at least half the Sun's light comes through).
 Frames without direct sunlight in the footage (the Sun below the horizon, the
 overcast run) are judged on the track's per-frame sunlight flag instead; the
@@ -207,10 +207,12 @@ def times_csv(folder, path):
     return path
 
 
-def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, uncalibrated=False):
+def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, uncalibrated=False,
+             extra=()):
     """Runs the estimate on the scene's scene.blend (a "<key>/true" twin: on
     its scene_true.blend); `times` passes the truth's capture times;
-    `uncalibrated` asks for the estimator's support as confidence."""
+    `uncalibrated` asks for the estimator's support as confidence; `extra`:
+    more flags of run_estimate.py."""
     twin = key.endswith(TRUE_SUFFIX)
     name = key.replace("/", "+")
     track = os.path.join(out_dir, smoothing, f"{name}.sun.json")
@@ -220,6 +222,7 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, unca
     args = ["--out", track, "--method", method, "--smoothing", smoothing]
     if uncalibrated:
         args.append("--uncalibrated-confidence")
+    args += list(extra)
     if times:
         args += ["--times", times_csv(folder, os.path.join(out_dir, f"{name}.times.csv"))]
     if smoothing == "physical":
@@ -520,6 +523,9 @@ def main(argv=None):
     p.add_argument("--uncalibrated-confidence", action="store_true",
                    help="the runs write the estimator's support as confidence (for "
                         "bench/calibrate.py) instead of the calibrated probability")
+    p.add_argument("--refine-model", action="store_true",
+                   help="the runs refine the hand-made model by the clip first "
+                        "(run_estimate.py --refine-model)")
     args = p.parse_args(argv)
     if args.scenes < 1:
         p.error(f"--scenes must be at least 1, got {args.scenes}")
@@ -593,7 +599,8 @@ def main(argv=None):
                 specs[base].get("multiday", {}).get("times_given", False)
             track, wall, err = estimate(k, folders[base], args.method, smoothing,
                                         os.path.join(work, "tracks"), log_dir, times,
-                                        args.uncalibrated_confidence)
+                                        args.uncalibrated_confidence,
+                                        ["--refine-model"] if args.refine_model else [])
             return score(k, folders[base], track, wall, err)
         with cf.ThreadPoolExecutor(args.jobs) as pool:
             rows = list(pool.map(run, runs))

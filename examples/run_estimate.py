@@ -9,7 +9,7 @@ Contract (the accuracy benchmarks call it exactly so; extend, never break):
       [--times CSV] [--latitude DEG] [--longitude DEG] [--date YYYY-MM-DD] \
       [--start-time HH:MM[:SS]] [--utc-offset HOURS] [--frame-seconds S] \
       [--fit-latitude | --fixed-latitude] [--initial-sun ZENITH AZIMUTH]
-      [--uncalibrated-confidence]
+      [--uncalibrated-confidence] [--refine-model]
 
 Flags:
   --out TRACK.json      the track file to write (*.sun.json; docs/track-format.md)
@@ -51,6 +51,15 @@ Flags:
                         2 deg, which is the default; for refitting that
                         calibration (bench/calibrate.py). The track's
                         method.confidence says which one a file holds
+  --refine-model        refine the hand-made model by the clip first (static
+                        cameras): each object in view moved, turned and
+                        scaled, the camera turned and zoomed, so that the
+                        model's edges fall on the edges that stay put in the
+                        footage; used only where the model is clearly off
+                        and the fit clearly puts it back. The estimate uses
+                        the refined model; the track's extra.model_refinement
+                        lists each correction (object_id indexes
+                        extra.model_objects). The .blend is not changed
 
 Clip, camera and model come from the .blend (active clip, scene camera) unless
 given. On failure it prints one line "sunlapse: error: <reason>" on stderr and

@@ -85,6 +85,11 @@ class EstimateOptions:
     # (calibration.py); False writes the estimator's support as it is, which
     # is what bench/calibrate.py refits the map from.
     calibrated_confidence: bool = True
+    # Refine the hand-made model by the clip before the estimate (native
+    # refine_model): each object moved, turned and scaled, the camera turned
+    # and zoomed, so that the model's edges fall on the clip's stable edges.
+    # The estimate uses the refined model; the track reports the corrections.
+    refine_model: bool = False
 
     def check(self) -> None:
         """Raises EstimateError naming the first option that cannot be."""

@@ -266,6 +266,10 @@ class WholeClipResult:
     clock_trusted: Optional[bool] = None
     # Frames the clock puts at night (their Sun is the ephemeris's).
     clock_night: List[int] = field(default_factory=list)
+    # The model refined by the clip (native ModelRefineResult; None: not
+    # asked, or see model_refinement_note).
+    model_refinement: Any = None
+    model_refinement_note: Optional[str] = None
 
 
 @dataclass
@@ -488,8 +492,8 @@ def estimate(native, scene, camera, frames: Sequence[int],
              source: Optional[SourceFn] = None,
              fit_circle: Optional[Callable[..., Any]] = None,
              clock_elevation_deg: Optional[Sequence[float]] = None,
-             frame_cameras: Optional[Dict[int, Any]] = None
-             ) -> WholeClipResult:
+             frame_cameras: Optional[Dict[int, Any]] = None,
+             refine_model: bool = False) -> WholeClipResult:
     """Raw Suns on `frames` (in capture order). `read_gray(frame)` returns
     the frame as float32 linear gray of the camera's size, or None or a
     sentence saying why there is none (not decodable, another size, a file
@@ -514,10 +518,13 @@ def estimate(native, scene, camera, frames: Sequence[int],
     (night_by_the_clock). `frame_cameras`: a moving camera, {frame: the
     native camera on it, of `camera`'s size, or where it has no pose None
     or a sentence saying why};
-    every frame is then seen from one of them (motion/view_warp.h)."""
+    every frame is then seen from one of them (motion/view_warp.h).
+    `refine_model`: the model and a fixed camera refined by the reference
+    frames' stable edges first (refine_model_by_clip); the result's
+    `model_refinement` says how."""
     return _WholeClip(native, scene, camera, frames, read_gray, ground_object_ids, times_s,
                       ignore_top_rows, progress, stream, source, fit_circle,
-                      clock_elevation_deg, frame_cameras).run()
+                      clock_elevation_deg, frame_cameras, refine_model).run()
 
 
 class _WholeClip:
@@ -527,8 +534,9 @@ class _WholeClip:
 
     def __init__(self, native, scene, camera, frames, read_gray, ground_object_ids, times_s,
                  ignore_top_rows, progress, stream, source, fit_circle,
-                 clock_elevation_deg=None, frame_cameras=None):
+                 clock_elevation_deg=None, frame_cameras=None, refine_model=False):
         self.native, self.scene, self.camera = native, scene, camera
+        self.refine_model = refine_model
         self.frames, self.n = list(frames), len(frames)
         self.read_gray, self.stream, self.source = read_gray, stream, source
         self.ground_ids, self.times_s = list(ground_object_ids), times_s
@@ -647,6 +655,13 @@ class _WholeClip:
         reference_frames: Iterable[Tuple[int, Gray]] = (
             ((f, self.reduced(self.read_gray(f), f)) for f in wanted_reference)
             if self.stream is None else self.stream(wanted_reference, near, size))
+        independent = getattr(reference_frames, "frames_independent", False)
+        if self.refine_model:
+            # The model is refined before anything is cast from it: the
+            # reference frames are all decoded first (the table no longer
+            # overlaps their decoding).
+            reference_frames = list(reference_frames)
+            self.refine_model_by_clip([_frame(image) for _, image in reference_frames])
         opts = native.SkyEvidenceOptions()
         opts.ignore_top_rows = self.top
         self.sky = native.SkyEvidence(self.scene, self.work, opts)
@@ -657,7 +672,6 @@ class _WholeClip:
                                             ignore_top_rows=self.top)
         reference: List[Optional[np.ndarray]] = []
         kept: Dict[int, np.ndarray] = {}
-        independent = getattr(reference_frames, "frames_independent", False)
         budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES or independent else 0
         wanted = set(frames)
         with ThreadPoolExecutor(max_workers=1) as beside:
@@ -679,6 +693,26 @@ class _WholeClip:
             self.result.message = why
             return None
         return kept
+
+    def refine_model_by_clip(self, grays: List[Optional[np.ndarray]]) -> None:
+        """The hand-made model and the camera refined so that the model's
+        edges fall on the edges that stay put over the reference frames
+        (native refine_model); the estimate then runs on the refined model.
+        A moving camera's model is left as it is (its views are solved)."""
+        native = self.native
+        if self.view is not None:
+            self.result.model_refinement_note = "not refined: the camera moves"
+            return
+        edges = native.stable_edges(grays, options=native.StableEdgesOptions(
+            ignore_top_rows=self.top))
+        if edges is None:
+            self.result.model_refinement_note = "not refined: fewer than two frames to see it in"
+            return
+        refined = native.refine_model(self.scene, self.work, self.ground_ids, edges)
+        self.result.model_refinement = refined
+        if refined.status == native.ModelRefineStatus.REFINED:
+            self.scene = native.corrected_scene(self.scene, refined)
+            self.work = native.corrected_camera(self.work, refined.camera)
 
     def clip_pass(self, kept: Dict[int, np.ndarray]) -> None:
         """The pass over the clip, in native code without Python's lock:
@@ -1224,7 +1258,8 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
         ignore_top_rows=options.ignore_top_rows,
         progress=None if progress is None else (lambda x: progress(0.95 * x)),
         stream=reads.stream, source=reads.frame_source, fit_circle=trimmed_circle.fit_trimmed,
-        clock_elevation_deg=elevation, frame_cameras=frame_cameras)
+        clock_elevation_deg=elevation, frame_cameras=frame_cameras,
+        refine_model=options.refine_model)
     if result.clock_contradicted:
         shown = ", ".join(map(str, sorted(result.clock_contradicted)[:5]))
         n = len(result.clock_contradicted)
@@ -1257,6 +1292,9 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
         _note(track, scene, camera, reads.samples, by_frame, options)
     elif result.message:
         track.report("estimate", trackfile.ProblemKind.FAILED, result.message)
+    if options.refine_model:
+        refinement = track.extra["model_refinement"] = _refinement(native, result)
+        track.report("model", trackfile.ProblemKind.HINT, _refinement_said(refinement))
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
     if result.evidence:
         track.extra["evidence"] = dict(result.evidence, frames=list(visit))
@@ -1267,6 +1305,45 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     track.extra["timing"] = dict(result.timing, decode_wait_s=reads.wait_seconds(),
                                  total_s=time.perf_counter() - t0)
     return track
+
+
+def _refinement(native, result: WholeClipResult) -> dict:
+    """The track's account of the model refined by the clip: whether the
+    estimate used it, and each object's and the camera's correction."""
+    r = result.model_refinement
+    if r is None:
+        return {"used": False, "message": result.model_refinement_note or "not refined"}
+    return {
+        "used": r.status == native.ModelRefineStatus.REFINED,
+        "status": r.status.name.lower(), "message": r.message,
+        "camera": {"turn_deg": r.camera.turn_deg, "focal_factor": r.camera.focal_factor,
+                   "turn_in_world": np.asarray(r.camera.turn_in_world).tolist()},
+        "objects": [{"object_id": o.object_id, "refined": o.refined, "points": o.points,
+                     "move_in_world_m": np.asarray(o.move_in_world_m).tolist(),
+                     "turn_deg": o.turn_deg, "scale": np.asarray(o.scale).tolist(),
+                     "pivot_in_world": np.asarray(o.pivot_in_world).tolist(),
+                     "axis_in_world": np.asarray(o.axis_in_world).tolist(),
+                     "transform": np.asarray(o.transform()).tolist(),
+                     "distance_before_px": o.distance_before_px,
+                     "distance_after_px": o.distance_after_px} for o in r.objects]}
+
+
+def _refinement_said(refinement: dict) -> str:
+    """One sentence for the user on what the clip changed in the model."""
+    if not refinement["used"]:
+        return (f"the model was not refined by the clip ({refinement['message']}); the "
+                f"estimate used it as modelled")
+    moved = [o for o in refinement["objects"] if o["refined"]]
+    move = max(float(np.hypot(*o["move_in_world_m"])) for o in moved)
+    turn = max(abs(o["turn_deg"]) for o in moved)
+    scale = max(abs(s - 1.0) for o in moved for s in o["scale"])
+    cam = refinement["camera"]
+    return (f"the clip refined the model: {len(moved)} of {len(refinement['objects'])} "
+            f"object(s) in view moved by up to {move:.2f} m, turned by up to {turn:.1f} deg "
+            f"and scaled by up to {100 * scale:.0f}%, the camera turned {cam['turn_deg']:.2f} "
+            f"deg and its focal length x{cam['focal_factor']:.3f}; the estimate used the "
+            f"refined model (the .blend is unchanged; model_refinement in the track file "
+            f"lists each object's correction)")
 
 
 def _geographic(sun_in_world, north: float) -> Tuple[float, float]:

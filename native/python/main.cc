@@ -12,6 +12,7 @@ void BindSky(py::module_& m);
 void BindWholeClip(py::module_& m);
 void BindVideo(py::module_& m);
 void BindMotion(py::module_& m);
+void BindRefine(py::module_& m);
 }  // namespace sunlapse::python
 
 PYBIND11_MODULE(_native, m) {
@@ -26,4 +27,5 @@ PYBIND11_MODULE(_native, m) {
   sunlapse::python::BindWholeClip(m);
   sunlapse::python::BindVideo(m);
   sunlapse::python::BindMotion(m);
+  sunlapse::python::BindRefine(m);
 }
