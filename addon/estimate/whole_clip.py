@@ -1294,7 +1294,8 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
         track.report("estimate", trackfile.ProblemKind.FAILED, result.message)
     if options.refine_model:
         refinement = track.extra["model_refinement"] = _refinement(native, result)
-        track.report("model", trackfile.ProblemKind.HINT, _refinement_said(refinement))
+        track.report("model_refinement", trackfile.ProblemKind.HINT,
+                     _refinement_said(refinement))
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
     if result.evidence:
         track.extra["evidence"] = dict(result.evidence, frames=list(visit))

@@ -1,8 +1,8 @@
 #include "sunlapse/refine/model_refine.h"
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <memory>
@@ -37,7 +37,8 @@ float Bilinear(const cv::Mat& m, double x, double y) {
   y = std::clamp(y, 0.0, m.rows - 1.0);
   const int x0 = std::min(static_cast<int>(x), m.cols - 2 < 0 ? 0 : m.cols - 2);
   const int y0 = std::min(static_cast<int>(y), m.rows - 2 < 0 ? 0 : m.rows - 2);
-  const int x1 = std::min(x0 + 1, m.cols - 1), y1 = std::min(y0 + 1, m.rows - 1);
+  const int x1 = std::min(x0 + 1, m.cols - 1),
+            y1 = std::min(y0 + 1, m.rows - 1);
   const double fx = x - x0, fy = y - y0;
   return static_cast<float>(
       (1 - fy) * ((1 - fx) * m.at<float>(y0, x0) + fx * m.at<float>(y0, x1)) +
@@ -46,8 +47,8 @@ float Bilinear(const cv::Mat& m, double x, double y) {
 
 // A point on one of the model's edges, in its object's footprint frame.
 struct EdgePoint {
-  int object = 0;               // index into the refined objects
-  Eigen::Vector3d local;        // A^T (p - pivot)
+  int object = 0;         // index into the refined objects
+  Eigen::Vector3d local;  // A^T (p - pivot)
 };
 
 struct ObjectFrame {
@@ -79,8 +80,9 @@ class Projector {
     if (x.z() <= 1e-6) return false;
     const double f = std::exp(c[3]);
     const Eigen::Matrix3d& K = camera_.K();
-    Eigen::Vector2d ideal(f * (K(0, 0) * x.x() + K(0, 1) * x.y()) / x.z() + K(0, 2),
-                          f * K(1, 1) * x.y() / x.z() + K(1, 2));
+    Eigen::Vector2d ideal(
+        f * (K(0, 0) * x.x() + K(0, 1) * x.y()) / x.z() + K(0, 2),
+        f * K(1, 1) * x.y() / x.z() + K(1, 2));
     if (camera_.distortion()) {
       PolynomialDistortion d = *camera_.distortion();
       d.focal_x_px *= f;
@@ -101,8 +103,12 @@ struct EdgeResidual {
   EdgeResidual(const Projector* projector, const ObjectFrame* frame,
                Eigen::Vector3d local, const Interpolator* distance,
                double far_px, const double* sigma_px)
-      : projector(projector), frame(frame), local(std::move(local)),
-        distance(distance), far_px(far_px), sigma_px(sigma_px) {}
+      : projector(projector),
+        frame(frame),
+        local(std::move(local)),
+        distance(distance),
+        far_px(far_px),
+        sigma_px(sigma_px) {}
   bool operator()(const double* cam, const double* obj, double* r) const {
     Eigen::Vector2d px;
     double d = far_px;
@@ -121,7 +127,8 @@ struct EdgeResidual {
 
 // A parameter's prior: value / sigma.
 struct Prior {
-  Prior(int n, std::vector<double> inv_sigma) : n(n), inv_sigma(std::move(inv_sigma)) {}
+  Prior(int n, std::vector<double> inv_sigma)
+      : n(n), inv_sigma(std::move(inv_sigma)) {}
   template <typename T>
   bool operator()(const T* p, T* r) const {
     for (int i = 0; i < n; ++i) r[i] = p[i] * inv_sigma[i];
@@ -178,7 +185,8 @@ cv::Mat StableEdges(const std::vector<cv::Mat>& frames,
   if (!(brightest > 0)) return cv::Mat();
   const cv::Size size = usable.front()->size();
   std::vector<cv::Mat> magnitudes;
-  cv::Mat jxx = cv::Mat::zeros(size, CV_32F), jxy = jxx.clone(), jyy = jxx.clone();
+  cv::Mat jxx = cv::Mat::zeros(size, CV_32F), jxy = jxx.clone(),
+          jyy = jxx.clone();
   for (size_t i = 0; i < usable.size(); ++i) {
     if (levels[i] < o.min_level_fraction * brightest) continue;
     // Log intensity: an edge between two faces keeps its strength when the
@@ -216,10 +224,12 @@ cv::Mat StableEdges(const std::vector<cv::Mat>& frames,
       const float m = median.at<float>(y, x);
       if (m < o.min_log_gradient) continue;
       // Across the edge: the structure tensor's main direction.
-      const double theta = 0.5 * std::atan2(2.0 * jxy.at<float>(y, x),
-                                            jxx.at<float>(y, x) - jyy.at<float>(y, x));
+      const double theta =
+          0.5 * std::atan2(2.0 * jxy.at<float>(y, x),
+                           jxx.at<float>(y, x) - jyy.at<float>(y, x));
       const double dx = std::cos(theta), dy = std::sin(theta);
-      if (m >= Bilinear(median, x + dx, y + dy) && m > Bilinear(median, x - dx, y - dy))
+      if (m >= Bilinear(median, x + dx, y + dy) &&
+          m > Bilinear(median, x - dx, y - dy))
         edges.at<uint8_t>(y, x) = 255;
     }
   }
@@ -234,8 +244,9 @@ void ModelRefineOptions::Check() const {
   Require(move_sigma_m > 0 && turn_sigma_deg > 0 && scale_sigma > 0 &&
               camera_turn_sigma_deg > 0 && focal_sigma > 0,
           "the *_sigma priors must be > 0");
-  Require(edge_spacing_px > 0 && edge_sigma_px > 0 && max_edge_distance_px > 0,
-          "edge_spacing_px, edge_sigma_px and max_edge_distance_px must be > 0");
+  Require(
+      edge_spacing_px > 0 && edge_sigma_px > 0 && max_edge_distance_px > 0,
+      "edge_spacing_px, edge_sigma_px and max_edge_distance_px must be > 0");
   Require(crease_deg > 0 && crease_deg < 180, "crease_deg must be in (0, 180)");
   Require(min_points_per_object >= 1, "min_points_per_object must be >= 1");
   Require(max_object_distance_px > 0, "max_object_distance_px must be > 0");
@@ -251,13 +262,15 @@ Eigen::Matrix4d ObjectCorrection::Transform() const {
   axes.col(1) = Eigen::Vector3d::UnitZ().cross(a);
   axes.col(2) = Eigen::Vector3d::UnitZ();
   const Eigen::Matrix3d linear =
-      Eigen::AngleAxisd(turn_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+      Eigen::AngleAxisd(turn_deg * kRadPerDeg, Eigen::Vector3d::UnitZ())
+          .toRotationMatrix() *
       axes * scale.asDiagonal() * axes.transpose();
   Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
   t.topLeftCorner<3, 3>() = linear;
-  t.topRightCorner<3, 1>() = pivot_in_world +
-                             Eigen::Vector3d(move_in_world_m.x(), move_in_world_m.y(), 0.0) -
-                             linear * pivot_in_world;
+  t.topRightCorner<3, 1>() =
+      pivot_in_world +
+      Eigen::Vector3d(move_in_world_m.x(), move_in_world_m.y(), 0.0) -
+      linear * pivot_in_world;
   return t;
 }
 
@@ -278,7 +291,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
 
   // Distance (px) to the nearest stable edge, capped.
   cv::Mat distance;
-  cv::distanceTransform(edges == 0, distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::distanceTransform(edges == 0, distance, cv::DIST_L2,
+                        cv::DIST_MASK_PRECISE);
   cv::Mat capped;
   cv::min(distance, o.max_edge_distance_px, capped);
   cv::Mat distance64;
@@ -303,7 +317,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
       continue;
     std::vector<Eigen::Vector3d> vertices;
     // Edge (v0 < v1) -> (normal, third vertex) of its triangles.
-    std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>>
+    std::map<std::pair<int, int>,
+             std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>>
         edge_faces;
     for (int64_t t : tris) {
       const Eigen::Vector3i tri = scene.triangle(t);
@@ -316,8 +331,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
       if (n.norm() < 1e-12) continue;
       for (int j = 0; j < 3; ++j) {
         const int a = tri[j], b = tri[(j + 1) % 3];
-        edge_faces[{std::min(a, b), std::max(a, b)}].emplace_back(n.normalized(),
-                                                                  p[(j + 2) % 3]);
+        edge_faces[{std::min(a, b), std::max(a, b)}].emplace_back(
+            n.normalized(), p[(j + 2) % 3]);
       }
     }
     if (vertices.empty()) continue;
@@ -333,15 +348,20 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
         // through the camera and the edge. Neither depends on which way
         // the triangles are wound.
         const Eigen::Vector3d m = (a - centre).cross(b - centre);
-        const double s0 = m.dot(faces[0].second - centre), s1 = m.dot(faces[1].second - centre);
-        feature = std::abs(faces[0].first.dot(faces[1].first)) < cos_crease || (s0 > 0) == (s1 > 0);
+        const double s0 = m.dot(faces[0].second - centre),
+                     s1 = m.dot(faces[1].second - centre);
+        feature = std::abs(faces[0].first.dot(faces[1].first)) < cos_crease ||
+                  (s0 > 0) == (s1 > 0);
       }
       if (!feature) continue;
       Eigen::Vector2d pa, pb;
-      if (!camera.WorldToPixel(a, &pa) || !camera.WorldToPixel(b, &pb)) continue;
-      const int n = std::min(2000, static_cast<int>(std::ceil((pb - pa).norm() /
-                                                              o.edge_spacing_px)));
-      for (int i = 0; i < n; ++i) samples.push_back(a + (b - a) * ((i + 0.5) / n));
+      if (!camera.WorldToPixel(a, &pa) || !camera.WorldToPixel(b, &pb))
+        continue;
+      const int n = std::min(
+          2000,
+          static_cast<int>(std::ceil((pb - pa).norm() / o.edge_spacing_px)));
+      for (int i = 0; i < n; ++i)
+        samples.push_back(a + (b - a) * ((i + 0.5) / n));
     }
     // Visible from the camera, and inside the image.
     std::vector<Eigen::Vector3d> kept;
@@ -365,8 +385,9 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     }
     HitBuffers buffers;
     buffers.distance = hit.data();
-    scene.Intersect(static_cast<int64_t>(kept.size()), origins.data(), directions.data(),
-                    0.0f, std::numeric_limits<float>::infinity(), buffers);
+    scene.Intersect(static_cast<int64_t>(kept.size()), origins.data(),
+                    directions.data(), 0.0f,
+                    std::numeric_limits<float>::infinity(), buffers);
     std::vector<uint8_t> occluded(kept.size(), 0);
     for (size_t i = 0; i < kept.size(); ++i) {
       const double dist = (kept[i] - centre).norm();
@@ -375,7 +396,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     const int index = static_cast<int>(frames.size());
     for (size_t i = 0; i < kept.size(); ++i) {
       if (occluded[i]) continue;
-      points.push_back({index, frame.axes.transpose() * (kept[i] - frame.pivot)});
+      points.push_back(
+          {index, frame.axes.transpose() * (kept[i] - frame.pivot)});
     }
     frames.push_back(frame);
     ids.push_back(id);
@@ -397,7 +419,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
   for (const auto& p : points) {
     if (count[p.object] < o.min_points_per_object) continue;
     used.push_back(&p);
-    auto* cost = new ceres::NumericDiffCostFunction<EdgeResidual, ceres::CENTRAL, 1, 4, 6>(
+    auto* cost = new ceres::NumericDiffCostFunction<EdgeResidual,
+                                                    ceres::CENTRAL, 1, 4, 6>(
         new EdgeResidual(&projector, &frames[p.object], p.local, &interpolate,
                          o.max_edge_distance_px, &sigma_px));
     blocks[p.object].push_back(problem.AddResidualBlock(
@@ -421,7 +444,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     problem.SetParameterLowerBound(cam.data(), i, -cam_max);
     problem.SetParameterUpperBound(cam.data(), i, cam_max);
   }
-  problem.SetParameterLowerBound(cam.data(), 3, std::log1p(-o.max_focal_change));
+  problem.SetParameterLowerBound(cam.data(), 3,
+                                 std::log1p(-o.max_focal_change));
   problem.SetParameterUpperBound(cam.data(), 3, std::log1p(o.max_focal_change));
   const double ls = std::log1p(o.scale_sigma);
   for (size_t k = 0; k < frames.size(); ++k) {
@@ -429,14 +453,18 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     double* q = params[k].data();
     problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<Prior, 6, 6>(new Prior(
-            6, {1 / o.move_sigma_m, 1 / o.move_sigma_m, 1 / (o.turn_sigma_deg * kRadPerDeg),
-                1 / ls, 1 / ls, 1 / ls})),
+            6, {1 / o.move_sigma_m, 1 / o.move_sigma_m,
+                1 / (o.turn_sigma_deg * kRadPerDeg), 1 / ls, 1 / ls, 1 / ls})),
         nullptr, q);
-    const double bounds[6] = {o.max_move_m, o.max_move_m, o.max_turn_deg * kRadPerDeg,
-                              std::log1p(o.max_scale_change), std::log1p(o.max_scale_change),
+    const double bounds[6] = {o.max_move_m,
+                              o.max_move_m,
+                              o.max_turn_deg * kRadPerDeg,
+                              std::log1p(o.max_scale_change),
+                              std::log1p(o.max_scale_change),
                               std::log1p(o.max_scale_change)};
     for (int i = 0; i < 6; ++i) {
-      problem.SetParameterLowerBound(q, i, i < 3 ? -bounds[i] : std::log1p(-o.max_scale_change));
+      problem.SetParameterLowerBound(
+          q, i, i < 3 ? -bounds[i] : std::log1p(-o.max_scale_change));
       problem.SetParameterUpperBound(q, i, bounds[i]);
     }
   }
@@ -448,7 +476,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     for (const EdgePoint* p : used) {
       double r = 0.0;
       EdgeResidual(&projector, &frames[p->object], p->local, &interpolate,
-                   o.max_edge_distance_px, &unit)(cam.data(), params[p->object].data(), &r);
+                   o.max_edge_distance_px,
+                   &unit)(cam.data(), params[p->object].data(), &r);
       (*per_object)[p->object] += r;
       sum += r;
     }
@@ -529,13 +558,15 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     }
     if (c.points > 0) out.objects.push_back(c);
   }
-  const double drop = 1.0 - out.distance_after_px / std::max(out.distance_before_px, 1e-300);
+  const double drop =
+      1.0 - out.distance_after_px / std::max(out.distance_before_px, 1e-300);
   std::ostringstream msg;
   msg.precision(3);
   msg << out.points << " edge points of the model, " << out.distance_before_px
       << " px from the clip's edges on average, " << out.distance_after_px
       << " px refined";
-  const int kept = static_cast<int>(std::count(confirmed.begin(), confirmed.end(), true));
+  const int kept =
+      static_cast<int>(std::count(confirmed.begin(), confirmed.end(), true));
   if (kept == 0) {
     out.status = ModelRefineResult::Status::kUnchanged;
     msg << "; no object's edges are confirmed by the clip's";
@@ -558,7 +589,8 @@ Scene CorrectedScene(const Scene& scene, const ModelRefineResult& result) {
   for (const auto& c : result.objects)
     if (c.refined) transform[c.object_id] = c.Transform();
   std::vector<Eigen::Vector3f> vertices(scene.num_vertices());
-  for (int64_t v = 0; v < scene.num_vertices(); ++v) vertices[v] = scene.vertex(v);
+  for (int64_t v = 0; v < scene.num_vertices(); ++v)
+    vertices[v] = scene.vertex(v);
   std::vector<Eigen::Vector3i> triangles(scene.num_triangles());
   std::vector<int32_t> ids(scene.num_triangles());
   // A vertex moves with the first object whose triangle uses it.
@@ -572,7 +604,8 @@ Scene CorrectedScene(const Scene& scene, const ModelRefineResult& result) {
       if (moved[v]) continue;
       moved[v] = 1;
       if (it == transform.end()) continue;
-      const Eigen::Vector4d p(vertices[v].x(), vertices[v].y(), vertices[v].z(), 1.0);
+      const Eigen::Vector4d p(vertices[v].x(), vertices[v].y(), vertices[v].z(),
+                              1.0);
       vertices[v] = (it->second * p).head<3>().cast<float>();
     }
   }

@@ -20,10 +20,13 @@ Camera TrueCamera() { return testing::LookAt(kEye, {0, 0, 0}, 640, 480); }
 std::vector<cv::Mat> Frames(const Scene& scene, const Camera& camera, int n) {
   std::vector<cv::Mat> frames;
   for (int i = 0; i < n; ++i) {
-    const double zenith = 35.0 + 30.0 * i / (n - 1), azimuth = 200.0 + 60.0 * i / (n - 1);
+    const double zenith = 35.0 + 30.0 * i / (n - 1),
+                 azimuth = 200.0 + 60.0 * i / (n - 1);
     testing::RenderOptions o;
     o.seed = 7 + i;
-    o.albedo = [](int id, const Eigen::Vector3f&) { return id == 0 ? 0.3 : id == 1 ? 0.6 : 0.45; };
+    o.albedo = [](int id, const Eigen::Vector3f&) {
+      return id == 0 ? 0.3 : id == 1 ? 0.6 : 0.45;
+    };
     frames.push_back(testing::RenderLambertian(
         scene, camera, SunInWorldFromAngles(zenith, azimuth), o));
   }
@@ -61,7 +64,8 @@ std::vector<cv::Point> ShadowBoundary(const Scene& scene, const Camera& camera,
   cv::dilate(shade, grown, cv::Mat());
   std::vector<cv::Point> out;
   for (size_t j = 0; j < which.size(); ++j) {
-    const int x = static_cast<int>(pixels[which[j]].x()), y = static_cast<int>(pixels[which[j]].y());
+    const int x = static_cast<int>(pixels[which[j]].x()),
+              y = static_cast<int>(pixels[which[j]].y());
     // Lit ground next to shade, away from the objects themselves.
     if (!occluded[j] && grown.at<uint8_t>(y, x) && x > 20 && y > 20 &&
         x < camera.width() - 20 && y < camera.height() - 20)
@@ -70,12 +74,14 @@ std::vector<cv::Point> ShadowBoundary(const Scene& scene, const Camera& camera,
   return out;
 }
 
-double FractionNearEdges(const cv::Mat& edges, const std::vector<cv::Point>& points) {
+double FractionNearEdges(const cv::Mat& edges,
+                         const std::vector<cv::Point>& points) {
   int near = 0;
   for (const auto& p : points) {
     bool any = false;
     for (int dy = -1; dy <= 1 && !any; ++dy)
-      for (int dx = -1; dx <= 1 && !any; ++dx) any = edges.at<uint8_t>(p.y + dy, p.x + dx) > 0;
+      for (int dx = -1; dx <= 1 && !any; ++dx)
+        any = edges.at<uint8_t>(p.y + dy, p.x + dx) > 0;
     near += any;
   }
   return points.empty() ? 0.0 : static_cast<double>(near) / points.size();
@@ -87,7 +93,8 @@ TEST(StableEdges, KeepTheModelsOutlinesAndLeaveMovingShadowsOut) {
   const auto frames = Frames(scene, camera, 9);
   const cv::Mat edges = StableEdges(frames);
   ASSERT_EQ(edges.size(), frames[0].size());
-  const auto shadow = ShadowBoundary(scene, camera, SunInWorldFromAngles(50.0, 230.0));
+  const auto shadow =
+      ShadowBoundary(scene, camera, SunInWorldFromAngles(50.0, 230.0));
   ASSERT_GT(shadow.size(), 100u);
   // One frame's edges hold its shadow's boundary: the check can fail.
   const cv::Mat one = StableEdges({frames[4], frames[4]});
@@ -95,12 +102,15 @@ TEST(StableEdges, KeepTheModelsOutlinesAndLeaveMovingShadowsOut) {
   EXPECT_LT(FractionNearEdges(edges, shadow), 0.25);
   // The box's top corners are on edges.
   int corners = 0;
-  for (const Eigen::Vector3d& c : {Eigen::Vector3d(-1.5, -1, 1.6), Eigen::Vector3d(0.5, -1, 1.6),
-                                  Eigen::Vector3d(0.5, 1.2, 1.6)}) {
+  for (const Eigen::Vector3d& c :
+       {Eigen::Vector3d(-1.5, -1, 1.6), Eigen::Vector3d(0.5, -1, 1.6),
+        Eigen::Vector3d(0.5, 1.2, 1.6)}) {
     Eigen::Vector2d px;
     ASSERT_TRUE(camera.WorldToPixel(c, &px));
-    corners += FractionNearEdges(edges, {cv::Point(static_cast<int>(std::lround(px.x())),
-                                                   static_cast<int>(std::lround(px.y())))}) > 0;
+    corners +=
+        FractionNearEdges(
+            edges, {cv::Point(static_cast<int>(std::lround(px.x())),
+                              static_cast<int>(std::lround(px.y())))}) > 0;
   }
   EXPECT_EQ(corners, 3);
 }
@@ -131,7 +141,9 @@ testing::Mesh Rough(const testing::Mesh& truth) {
       const int v = m.t[t][j];
       if (done[v]) continue;
       done[v] = true;
-      m.v[v] = (tr * Eigen::Vector4d(m.v[v].x(), m.v[v].y(), m.v[v].z(), 1)).head<3>().cast<float>();
+      m.v[v] = (tr * Eigen::Vector4d(m.v[v].x(), m.v[v].y(), m.v[v].z(), 1))
+                   .head<3>()
+                   .cast<float>();
     }
   }
   return m;
@@ -143,7 +155,8 @@ double MaxVertexError(const Scene& a, const testing::Mesh& truth) {
     if (truth.ids[t] == 0) continue;
     for (int j = 0; j < 3; ++j) {
       const int v = truth.t[t][j];
-      worst = std::max(worst, static_cast<double>((a.vertex(v) - truth.v[v]).norm()));
+      worst = std::max(worst,
+                       static_cast<double>((a.vertex(v) - truth.v[v]).norm()));
     }
   }
   return worst;
@@ -151,8 +164,8 @@ double MaxVertexError(const Scene& a, const testing::Mesh& truth) {
 
 // The largest distance (px) between where two (model, camera) pairs show
 // the objects' corners: what the clip can check of a model.
-double MaxImageError(const Scene& a, const Camera& camera_a, const testing::Mesh& truth,
-                     const Camera& camera_truth) {
+double MaxImageError(const Scene& a, const Camera& camera_a,
+                     const testing::Mesh& truth, const Camera& camera_truth) {
   double worst = 0;
   for (size_t t = 0; t < truth.t.size(); ++t) {
     if (truth.ids[t] == 0) continue;
@@ -182,14 +195,17 @@ TEST(RefineModel, PutsAHandMadeModelAndCameraBackWhereTheClipShowsThem) {
   const cv::Mat edges = StableEdges(Frames(true_scene, true_camera, 9));
   const Scene rough = Rough(truth).Build();
   CameraCorrection off;
-  off.turn_in_world = Eigen::AngleAxisd(0.3 * kRadPerDeg, Eigen::Vector3d(1, 2, -0.5).normalized())
-                          .toRotationMatrix();
+  off.turn_in_world =
+      Eigen::AngleAxisd(0.3 * kRadPerDeg,
+                        Eigen::Vector3d(1, 2, -0.5).normalized())
+          .toRotationMatrix();
   off.focal_factor = 1.02;
   const Camera rough_camera = CorrectedCamera(true_camera, off);
   ASSERT_GT(MaxVertexError(rough, truth), 0.15);
   ASSERT_GT(MaxImageError(rough, rough_camera, truth, true_camera), 8.0);
 
-  const ModelRefineResult r = RefineModel(rough, rough_camera, {0}, edges, Loose());
+  const ModelRefineResult r =
+      RefineModel(rough, rough_camera, {0}, edges, Loose());
   ASSERT_EQ(r.status, ModelRefineResult::Status::kRefined) << r.message;
   EXPECT_LT(r.distance_after_px, 0.5 * r.distance_before_px);
   ASSERT_EQ(r.objects.size(), 2u);
@@ -198,7 +214,8 @@ TEST(RefineModel, PutsAHandMadeModelAndCameraBackWhereTheClipShowsThem) {
   // (All objects a little larger and the focal a little shorter look
   // alike; the priors split such a difference.)
   const Scene corrected = CorrectedScene(rough, r);
-  EXPECT_LT(MaxImageError(corrected, CorrectedCamera(rough_camera, r.camera), truth, true_camera),
+  EXPECT_LT(MaxImageError(corrected, CorrectedCamera(rough_camera, r.camera),
+                          truth, true_camera),
             2.5);
   EXPECT_LT(MaxVertexError(corrected, truth), 0.1);
 }
@@ -207,11 +224,12 @@ TEST(RefineModel, LeavesATrueModelWhereTheClipShowsIt) {
   const testing::Mesh truth = testing::BoxAndPole();
   const Scene scene = truth.Build();
   const Camera camera = TrueCamera();
-  const ModelRefineResult r =
-      RefineModel(scene, camera, {0}, StableEdges(Frames(scene, camera, 9)), Loose());
+  const ModelRefineResult r = RefineModel(
+      scene, camera, {0}, StableEdges(Frames(scene, camera, 9)), Loose());
   EXPECT_LT(r.distance_before_px, 1.5);
   const Camera refined = r.ok() ? CorrectedCamera(camera, r.camera) : camera;
-  EXPECT_LT(MaxImageError(r.ok() ? CorrectedScene(scene, r) : truth.Build(), refined, truth, camera),
+  EXPECT_LT(MaxImageError(r.ok() ? CorrectedScene(scene, r) : truth.Build(),
+                          refined, truth, camera),
             1.0);
   EXPECT_LT(r.camera.turn_deg, 0.5);
 }
@@ -224,7 +242,8 @@ TEST(RefineModel, SaysWhenThereIsNothingToFit) {
   // The camera looking away from the model: none of its edges in view.
   const Camera away = testing::LookAt(kEye, {20, -40, 9}, 640, 480);
   const cv::Mat blank(480, 640, CV_8U, cv::Scalar(0));
-  EXPECT_EQ(RefineModel(scene, away, {0}, blank).status, ModelRefineResult::Status::kNoEdges);
+  EXPECT_EQ(RefineModel(scene, away, {0}, blank).status,
+            ModelRefineResult::Status::kNoEdges);
   ModelRefineOptions bad;
   bad.max_scale_change = 1.5;
   EXPECT_THROW(bad.Check(), std::invalid_argument);

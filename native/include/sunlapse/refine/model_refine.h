@@ -104,7 +104,7 @@ struct ObjectCorrection {
   // false: too few visible edge points, or the clip's edges do not confirm
   // the fit (max_object_distance_px): left as the user placed it.
   bool refined = false;
-  int points = 0;        // visible edge points used
+  int points = 0;  // visible edge points used
   // Mean distance (px, capped) of its edge points to the stable edges.
   double distance_before_px = 0.0;
   double distance_after_px = 0.0;
@@ -123,10 +123,10 @@ struct CameraCorrection {
 
 struct ModelRefineResult {
   enum class Status {
-    kRefined,     // corrections found and the fit is better with them
-    kUnchanged,   // the model already fits, or the fit is not clearly better
-    kNoEdges,     // no stable edges, or too few of the model's in view
-    kFailed,      // the solver failed
+    kRefined,    // corrections found and the fit is better with them
+    kUnchanged,  // the model already fits, or the fit is not clearly better
+    kNoEdges,    // no stable edges, or too few of the model's in view
+    kFailed,     // the solver failed
   };
   Status status = Status::kFailed;
   bool ok() const { return status == Status::kRefined; }
