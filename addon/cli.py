@@ -92,6 +92,11 @@ def build_parser():
                         "turned and scaled and the camera turned and zoomed so that the "
                         "model's edges fall on the footage's; the estimate uses the refined "
                         "model and the track lists the corrections (the .blend is not changed)")
+    p.add_argument("--apply-model-corrections", action="store_true",
+                   help="with --refine-model: apply the corrections the estimate used to the "
+                        "objects and camera of the open .blend (kept with --save, used by "
+                        "--render-ar); objects that keys, drivers or constraints move are "
+                        "left as they are")
     p.add_argument("--uncalibrated-confidence", action="store_true",
                    help="write each frame's support as the estimator computes it instead of "
                         "the probability of being within 2 deg; for refitting that "
@@ -152,6 +157,9 @@ def check_flags(args):
                                                and args.frame_seconds > 0):
         fail(EXIT_USAGE, f"--frame-seconds {args.frame_seconds} is not a positive number of "
                          f"seconds (0 would put every frame at one instant)")
+    if args.apply_model_corrections and not args.refine_model:
+        fail(EXIT_USAGE, "--apply-model-corrections needs --refine-model (the corrections "
+                         "come from refining the model by the clip)")
     if args.initial_sun:
         z, a = args.initial_sun
         if not (math.isfinite(z) and 0 <= z < 90):
@@ -329,7 +337,7 @@ def place_flags(args):
 def _run(argv, interrupt):
     import bpy
     from . import register
-    from .blender import ar, gather, job, keys, report
+    from .blender import ar, gather, job, keys, model_fix, report
     from .blender.place import PlaceTimeError
     from .estimate import errors, native_loader, run as estimate_run
     from .core import trackfile
@@ -371,7 +379,7 @@ def _run(argv, interrupt):
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)
         options.calibrated_confidence = not args.uncalibrated_confidence
-        options.refine_model = args.refine_model
+        options.refine_model = args.refine_model or options.refine_model
         interrupt.check()
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "
@@ -413,6 +421,18 @@ def _run(argv, interrupt):
         print(f"sunlapse: no direct sunlight on {len(dark)} frame(s) "
               f"({trackfile.frame_ranges(dark)}): {predicted} of them have their Sun "
               f"predicted from the path, at confidence 0")
+    if args.apply_model_corrections:
+        interrupt.check()
+        try:
+            said, skipped = model_fix.apply_corrections(context, track)
+        except ValueError as e:
+            print(f"sunlapse: note: {e}")
+        else:
+            print(f"sunlapse: {said}")
+            for what in skipped:
+                print(f"sunlapse: warning: model correction not applied to {what}")
+            if not args.save and not args.render_ar:
+                print("sunlapse: note: the corrected model is not saved: add --save OUT.blend")
     if args.apply_lamp or args.render_ar:
         interrupt.check()
         try:

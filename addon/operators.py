@@ -8,7 +8,8 @@ import bpy
 from bpy.props import EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from .blender import ar, background, export, gather, job, keys, lamp, place, report, store
+from .blender import ar, background, export, gather, job, keys, lamp, model_fix, place, report, \
+    store
 from .blender.background import RUN, redraw_all, running
 from .panels import wrapped
 from .estimate import errors, frames as clip_frames, native_loader, thesis
@@ -341,6 +342,35 @@ class CLIP_OT_sunlapse_apply_lamp(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class CLIP_OT_sunlapse_apply_model(bpy.types.Operator):
+    """Move, turn and scale the model's objects and turn and zoom the camera
+    as the clip refined them (Refine Model); once, undoable"""
+    bl_idname = "clip.sunlapse_apply_model"
+    bl_label = "Apply Model Corrections"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        track = store.load_track()
+        return track is not None and "model_refinement" in track.extra
+
+    def execute(self, context):
+        track = store.load_track()
+        if track is None:
+            self.report({"ERROR"}, "No Sun track in this file: run Estimate Sun first")
+            return {"CANCELLED"}
+        try:
+            said, skipped = model_fix.apply_corrections(context, track)
+        except ValueError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        if skipped:
+            self.report({"WARNING"}, f"{said}; left as they are: {'; '.join(skipped)}")
+        else:
+            self.report({"INFO"}, said)
+        return {"FINISHED"}
+
+
 class CLIP_OT_sunlapse_export(bpy.types.Operator, ExportHelper):
     """Export the Sun track (sunlapse JSON or CSV) or the animated Sun lamp (glTF)"""
     bl_idname = "clip.sunlapse_export"
@@ -560,7 +590,8 @@ class CLIP_OT_sunlapse_solve_camera(bpy.types.Operator):
 
 classes = (CLIP_OT_sunlapse_solve_camera, CLIP_OT_sunlapse_check_scene,
            CLIP_OT_sunlapse_initial_sun, CLIP_OT_sunlapse_estimate, CLIP_OT_sunlapse_cancel,
-           CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_export, CLIP_OT_sunlapse_setup_ar,
+           CLIP_OT_sunlapse_apply_lamp, CLIP_OT_sunlapse_apply_model, CLIP_OT_sunlapse_export,
+           CLIP_OT_sunlapse_setup_ar,
            CLIP_OT_sunlapse_to_sun_position, CLIP_OT_sunlapse_notice,
            CLIP_OT_sunlapse_show_text)
 _register, _unregister = bpy.utils.register_classes_factory(classes)

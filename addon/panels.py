@@ -197,6 +197,8 @@ def draw_estimate(self, context):
     layout.prop(s, "times_file", text="Times File")
     if clip is not None and clip.source == "SEQUENCE":
         layout.prop(s, "use_exif_times")
+    layout.prop(s, "refine_model")
+    draw_model_refinement(layout, context)
     col = layout.column(align=True)
     col.use_property_split = False
     run = _running()
@@ -209,6 +211,23 @@ def draw_estimate(self, context):
     sub = col.row(align=True)
     sub.enabled = not run["running"]
     sub.operator("clip.sunlapse_initial_sun", text="Current Frame Only", icon="LIGHT_SUN")
+
+
+def draw_model_refinement(layout, context):
+    """What the last run's Refine Model found, and the button that applies
+    it to the model."""
+    track = store.load_track()
+    r = track.extra.get("model_refinement") if track is not None else None
+    if not isinstance(r, dict):
+        return
+    problem = track.problem("model_refinement")
+    col = layout.column(align=True)
+    if problem is not None:
+        wrapped(col, context, problem.message, icon="MESH_CUBE", max_lines=4)
+    if r.get("used") and not r.get("applied"):
+        col.operator("clip.sunlapse_apply_model", icon="CHECKMARK")
+    elif r.get("applied"):
+        col.label(text="Model corrections applied", icon="CHECKMARK")
 
 
 def draw_place(self, context):

@@ -84,6 +84,12 @@ class SunlapseSettings(bpy.types.PropertyGroup):
         description="Image sequences: read each frame's capture time (DateTimeOriginal, "
                     "sub-seconds) and GPS position from its EXIF data when no times file "
                     "is given")
+    refine_model: BoolProperty(
+        name="Refine Model", default=False,
+        description="Before the estimate, move, turn and scale each modelled object and "
+                    "turn and zoom the camera so that the model's edges fall on the "
+                    "footage's (a fixed camera; used only where the model is clearly off). "
+                    "The .blend changes only with Apply Model Corrections")
     fit_latitude: BoolProperty(
         name="Fit Latitude", default=False,
         description="Physical smoothing also fits the latitude near the given one; off: "

@@ -9,7 +9,7 @@ Contract (the accuracy benchmarks call it exactly so; extend, never break):
       [--times CSV] [--latitude DEG] [--longitude DEG] [--date YYYY-MM-DD] \
       [--start-time HH:MM[:SS]] [--utc-offset HOURS] [--frame-seconds S] \
       [--fit-latitude | --fixed-latitude] [--initial-sun ZENITH AZIMUTH]
-      [--uncalibrated-confidence] [--refine-model]
+      [--uncalibrated-confidence] [--refine-model [--apply-model-corrections]]
 
 Flags:
   --out TRACK.json      the track file to write (*.sun.json; docs/track-format.md)
@@ -59,7 +59,13 @@ Flags:
                         and the fit clearly puts it back. The estimate uses
                         the refined model; the track's extra.model_refinement
                         lists each correction (object_id indexes
-                        extra.model_objects). The .blend is not changed
+                        method.options.model_objects). The .blend is not
+                        changed
+  --apply-model-corrections
+                        with --refine-model: apply those corrections to the
+                        open .blend's objects and camera (kept with --save,
+                        used by --render-ar); objects moved by keys, drivers
+                        or constraints are left as they are and named
 
 Clip, camera and model come from the .blend (active clip, scene camera) unless
 given. On failure it prints one line "sunlapse: error: <reason>" on stderr and

@@ -138,8 +138,9 @@ def prepare_job(context, settings=None, collection=None, ground=None, frames=Non
     options = EstimateOptions(
         method=method or settings.method, smoothing=smoothing or settings.smoothing,
         ignore_top_rows=settings.ignore_top_rows,
-        north_offset_deg=gather.scene_north_offset_deg(context), ground_object_ids=ids)
-    track_extra = {"ground": names, "model_objects": model.names}
+        north_offset_deg=gather.scene_north_offset_deg(context), ground_object_ids=ids,
+        refine_model=settings.refine_model)
+    track_extra = {"ground": names, "model_objects": model.names, "camera": cam.name}
     times_path = times_file if times_file is not None else (
         settings.times_file and bpy.path.abspath(settings.times_file))
     gps = None

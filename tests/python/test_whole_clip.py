@@ -64,20 +64,28 @@ def path(k, n):
     return sun(58 - 28 * t, 100 + 70 * t)
 
 
-@pytest.fixture(scope="module")
-def world():
+def model(rough=None):
+    """The ground (0), a post (1), a box (2) and a wall (3); `rough`: {id:
+    (dx, dy, z scale)} for a hand-made model's errors."""
     verts = [(-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0)]
     tris = [(0, 1, 2), (0, 2, 3)]
     ids = [0, 0]
     for lo, hi, oid in (((-0.08, -0.08, 0), (0.08, 0.08, 3.2), 1),
                         ((2.0, 1.0, 0), (3.2, 2.2, 2.4), 2),
                         ((-4.0, 3.0, 0), (1.0, 3.25, 2.0), 3)):
-        v, f = box(lo, hi, len(verts))
+        dx, dy, kz = (rough or {}).get(oid, (0.0, 0.0, 1.0))
+        v, f = box((lo[0] + dx, lo[1] + dy, lo[2]), (hi[0] + dx, hi[1] + dy, hi[2] * kz),
+                   len(verts))
         verts += v
         tris += f
         ids += [oid] * len(f)
-    scene = native.Scene(np.array(verts, np.float32), np.array(tris, np.int32),
-                         np.array(ids, np.int32))
+    return native.Scene(np.array(verts, np.float32), np.array(tris, np.int32),
+                        np.array(ids, np.int32))
+
+
+@pytest.fixture(scope="module")
+def world():
+    scene = model()
     camera = native.Camera.from_blender(lens_mm=28, sensor_width_mm=36, sensor_height_mm=24,
                                         width=W, height=H,
                                         matrix_world=look_at((-3, -9, 6.5), (0, 1, 0)))
@@ -732,3 +740,31 @@ def test_a_moving_camera_reads_key_frames_as_reference_when_all_have_poses(world
     assert asked_near == [every == 1]
     errors = [error_deg(r.sun_in_world, truth[r.frame - 1]) for r in result.frames]
     assert np.mean(errors) < 0.5 and max(errors) < 1.0, errors
+
+
+def test_a_rough_model_is_refined_by_the_clip_and_a_true_one_left_alone(world):
+    n = 20
+    truth = [path(k, n) for k in range(n)]
+    frames = [draw(world, truth[k], k) for k in range(n)]
+    numbers = list(range(1, n + 1))
+
+    def estimate(scene, refine):
+        return whole_clip.estimate(native, scene, world[1], numbers, lambda f: frames[f - 1],
+                                   [0], refine_model=refine)
+
+    def mean_error(result):
+        return float(np.mean([error_deg(r.sun_in_world, truth[k])
+                              for k, r in enumerate(result.frames)]))
+
+    kept = estimate(world[0], True)
+    assert kept.model_refinement is not None
+    assert kept.model_refinement.status != native.ModelRefineStatus.REFINED, \
+        kept.model_refinement.message
+    assert mean_error(kept) < 0.5
+
+    rough = model({1: (0.3, -0.25, 1.15), 2: (0.25, 0.3, 0.88), 3: (-0.2, 0.2, 1.1)})
+    as_made, refined = estimate(rough, False), estimate(rough, True)
+    r = refined.model_refinement
+    print("rough model: as made", mean_error(as_made), "refined", mean_error(refined), r.message)
+    assert r.status == native.ModelRefineStatus.REFINED, r.message
+    assert mean_error(refined) < 0.5 * mean_error(as_made)
