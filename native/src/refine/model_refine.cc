@@ -488,6 +488,38 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
   std::vector<double> before, after;
   out.distance_before_px = distances(&before);
 
+  // Each object starts from its best move on a grid over the bounds (a
+  // chamfer search): the continuous fit alone stops at the nearest edges,
+  // which for a box several pixels off are often not its own.
+  {
+    const double step = 0.25 * o.move_sigma_m;
+    const int n = static_cast<int>(std::floor(o.max_move_m / step));
+    std::vector<std::vector<const EdgePoint*>> of(frames.size());
+    for (const EdgePoint* p : used) of[p->object].push_back(p);
+    for (size_t k = 0; k < frames.size(); ++k) {
+      if (of[k].empty()) continue;
+      double best = std::numeric_limits<double>::infinity();
+      std::array<double, 6> q = params[k], chosen = params[k];
+      for (int i = -n; i <= n; ++i) {
+        for (int j = -n; j <= n; ++j) {
+          q[0] = i * step;
+          q[1] = j * step;
+          double cost = 0.0;
+          for (const EdgePoint* p : of[k]) {
+            double r = 0.0;
+            EdgeResidual(&projector, &frames[k], p->local, &interpolate, o.max_edge_distance_px,
+                         &sigma_px)(cam.data(), q.data(), &r);
+            cost += std::log1p(r * r);  // the Cauchy loss
+          }
+          // The prior on the move, as the fit weighs it.
+          cost = 0.5 * cost + 0.5 * (q[0] * q[0] + q[1] * q[1]) / (o.move_sigma_m * o.move_sigma_m);
+          if (cost < best) best = cost, chosen = q;
+        }
+      }
+      params[k] = chosen;
+    }
+  }
+
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_QR;
   solver.max_num_iterations = 60;
