@@ -140,6 +140,8 @@ def confident_only(track):
 # clocked by the frames' times; the place comes from the .blend).
 FLAGS = {"default": ["--method", "default"],
          "thesis": ["--method", "thesis"],
+         # The hand-made model refined by the clip first (issue 25 item 5).
+         "refined": ["--method", "default", "--refine-model"],
          "physical": ["--method", "default", "--smoothing", "physical", "--fit-latitude"],
          "physical_lat": ["--method", "default", "--smoothing", "physical", "--fixed-latitude"]}
 

@@ -55,6 +55,10 @@ void BindRefine(py::module_& m) {
              "Bound of the focal length's change (fraction).")
       .field("move_sigma_m", &ModelRefineOptions::move_sigma_m,
              "Prior of a move (m).")
+      .field("max_move_fraction", &ModelRefineOptions::max_move_fraction,
+             "Bound of a move as a fraction of the object's largest extent.")
+      .field("move_sigma_fraction", &ModelRefineOptions::move_sigma_fraction,
+             "Prior of a move as a fraction of the object's largest extent.")
       .field("turn_sigma_deg", &ModelRefineOptions::turn_sigma_deg,
              "Prior of a turn (deg).")
       .field("scale_sigma", &ModelRefineOptions::scale_sigma,

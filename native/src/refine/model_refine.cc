@@ -54,6 +54,11 @@ struct EdgePoint {
 struct ObjectFrame {
   Eigen::Vector3d pivot;
   Eigen::Matrix3d axes;  // columns: axis, z x axis, z
+  double size_m = 0.0;   // its largest extent (bounding box)
+  // How far it may move, and how far a hand-made one is typically off:
+  // the options' metres, or less for a small object (ModelRefineOptions).
+  double max_move_m = 0.0;
+  double move_sigma_m = 0.0;
 };
 
 Eigen::Vector3d Corrected(const ObjectFrame& f, const Eigen::Vector3d& local,
@@ -155,6 +160,9 @@ ObjectFrame FrameOf(const std::vector<Eigen::Vector3d>& vertices) {
   f.axes.col(0) = axis;
   f.axes.col(1) = Eigen::Vector3d::UnitZ().cross(axis);
   f.axes.col(2) = Eigen::Vector3d::UnitZ();
+  Eigen::AlignedBox3d box;
+  for (const auto& v : vertices) box.extend(v);
+  f.size_m = box.sizes().maxCoeff();
   return f;
 }
 
@@ -241,6 +249,8 @@ void ModelRefineOptions::Check() const {
               max_scale_change < 1 && max_camera_turn_deg > 0 &&
               max_focal_change > 0 && max_focal_change < 1,
           "the max_* bounds must be > 0 (scale and focal changes < 1)");
+  Require(max_move_fraction > 0 && move_sigma_fraction > 0,
+          "max_move_fraction and move_sigma_fraction must be > 0");
   Require(move_sigma_m > 0 && turn_sigma_deg > 0 && scale_sigma > 0 &&
               camera_turn_sigma_deg > 0 && focal_sigma > 0,
           "the *_sigma priors must be > 0");
@@ -336,7 +346,11 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
       }
     }
     if (vertices.empty()) continue;
-    const ObjectFrame frame = FrameOf(vertices);
+    ObjectFrame frame = FrameOf(vertices);
+    frame.max_move_m =
+        std::min(o.max_move_m, o.max_move_fraction * frame.size_m);
+    frame.move_sigma_m =
+        std::min(o.move_sigma_m, o.move_sigma_fraction * frame.size_m);
     const double cos_crease = std::cos(o.crease_deg * kRadPerDeg);
     std::vector<Eigen::Vector3d> samples;
     for (const auto& [edge, faces] : edge_faces) {
@@ -453,15 +467,13 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
     double* q = params[k].data();
     problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<Prior, 6, 6>(new Prior(
-            6, {1 / o.move_sigma_m, 1 / o.move_sigma_m,
+            6, {1 / frames[k].move_sigma_m, 1 / frames[k].move_sigma_m,
                 1 / (o.turn_sigma_deg * kRadPerDeg), 1 / ls, 1 / ls, 1 / ls})),
         nullptr, q);
-    const double bounds[6] = {o.max_move_m,
-                              o.max_move_m,
-                              o.max_turn_deg * kRadPerDeg,
-                              std::log1p(o.max_scale_change),
-                              std::log1p(o.max_scale_change),
-                              std::log1p(o.max_scale_change)};
+    const double bounds[6] = {
+        frames[k].max_move_m,           frames[k].max_move_m,
+        o.max_turn_deg * kRadPerDeg,    std::log1p(o.max_scale_change),
+        std::log1p(o.max_scale_change), std::log1p(o.max_scale_change)};
     for (int i = 0; i < 6; ++i) {
       problem.SetParameterLowerBound(
           q, i, i < 3 ? -bounds[i] : std::log1p(-o.max_scale_change));
@@ -492,12 +504,12 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
   // chamfer search): the continuous fit alone stops at the nearest edges,
   // which for a box several pixels off are often not its own.
   {
-    const double step = 0.25 * o.move_sigma_m;
-    const int n = static_cast<int>(std::floor(o.max_move_m / step));
     std::vector<std::vector<const EdgePoint*>> of(frames.size());
     for (const EdgePoint* p : used) of[p->object].push_back(p);
     for (size_t k = 0; k < frames.size(); ++k) {
       if (of[k].empty()) continue;
+      const double sigma = frames[k].move_sigma_m, step = 0.25 * sigma;
+      const int n = static_cast<int>(std::floor(frames[k].max_move_m / step));
       double best = std::numeric_limits<double>::infinity();
       std::array<double, 6> q = params[k], chosen = params[k];
       for (int i = -n; i <= n; ++i) {
@@ -507,12 +519,14 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
           double cost = 0.0;
           for (const EdgePoint* p : of[k]) {
             double r = 0.0;
-            EdgeResidual(&projector, &frames[k], p->local, &interpolate, o.max_edge_distance_px,
+            EdgeResidual(&projector, &frames[k], p->local, &interpolate,
+                         o.max_edge_distance_px,
                          &sigma_px)(cam.data(), q.data(), &r);
             cost += std::log1p(r * r);  // the Cauchy loss
           }
           // The prior on the move, as the fit weighs it.
-          cost = 0.5 * cost + 0.5 * (q[0] * q[0] + q[1] * q[1]) / (o.move_sigma_m * o.move_sigma_m);
+          cost =
+              0.5 * cost + 0.5 * (q[0] * q[0] + q[1] * q[1]) / (sigma * sigma);
           if (cost < best) best = cost, chosen = q;
         }
       }

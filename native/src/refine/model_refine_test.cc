@@ -234,6 +234,41 @@ TEST(RefineModel, LeavesATrueModelWhereTheClipShowsIt) {
   EXPECT_LT(r.camera.turn_deg, 0.5);
 }
 
+// The corrections of object `id` (none when it was not in view).
+const ObjectCorrection* CorrectionOf(const ModelRefineResult& r, int id) {
+  for (const auto& c : r.objects)
+    if (c.object_id == id) return &c;
+  return nullptr;
+}
+
+TEST(RefineModel, MovesASmallObjectByAtMostAFractionOfItsSize) {
+  // The footage shows a 0.5 m cube 0.2 m from where the model has it.
+  const float size = 0.5f;
+  testing::Mesh truth = testing::BoxAndPole();
+  truth.Box({-1.0f, -4.0f, 0}, {-1.0f + size, -4.0f + size, size}, 3);
+  testing::Mesh modelled = testing::BoxAndPole();
+  modelled.Box({-0.8f, -4.0f, 0}, {-0.8f + size, -4.0f + size, size}, 3);
+  const Camera camera = TrueCamera();
+  const cv::Mat edges = StableEdges(Frames(truth.Build(), camera, 9));
+  ModelRefineOptions o = Loose();
+  o.max_move_m = o.move_sigma_m = 1.0;  // the metres alone would let it go back
+  ModelRefineOptions wide = o;
+  wide.max_move_fraction = wide.move_sigma_fraction = 10.0;
+  const ObjectCorrection* free =
+      CorrectionOf(RefineModel(modelled.Build(), camera, {0}, edges, wide), 3);
+  ASSERT_NE(free, nullptr);
+  ASSERT_TRUE(free->refined);
+  // Free, it goes back most of the way: beyond what the fraction allows.
+  EXPECT_LT(free->move_in_world_m.x(), -o.max_move_fraction * size - 0.02);
+  const ObjectCorrection* held =
+      CorrectionOf(RefineModel(modelled.Build(), camera, {0}, edges, o), 3);
+  ASSERT_NE(held, nullptr);
+  EXPECT_LE(std::abs(held->move_in_world_m.x()),
+            o.max_move_fraction * size + 1e-9);
+  EXPECT_LE(std::abs(held->move_in_world_m.y()),
+            o.max_move_fraction * size + 1e-9);
+}
+
 TEST(RefineModel, SaysWhenThereIsNothingToFit) {
   const Scene scene = testing::BoxAndPole().Build();
   const Camera camera = TrueCamera();

@@ -59,6 +59,11 @@ struct ModelRefineOptions {
   double max_focal_change = 0.06;  // focal within 1 +- this
   // Priors: how far a hand-made model is typically off (issue 25).
   double move_sigma_m = 0.15;
+  // A small object is modelled closer: its move's bound and prior are at
+  // most these fractions of its largest extent (a sundial's 5 cm nodus
+  // moved 0.3 m under the metres above, onto the gnomon's edges).
+  double max_move_fraction = 0.3;
+  double move_sigma_fraction = 0.15;
   double turn_sigma_deg = 2.0;
   double scale_sigma = 0.06;
   double camera_turn_sigma_deg = 0.3;
