@@ -308,7 +308,8 @@ def _make_classes():
 # own motion-tracking tools sit there.
 MENU_OPERATORS = ("clip.sunlapse_solve_camera", "clip.sunlapse_check_scene",
                   "clip.sunlapse_estimate", "clip.sunlapse_initial_sun",
-                  "clip.sunlapse_apply_lamp", "clip.sunlapse_setup_ar",
+                  "clip.sunlapse_apply_model", "clip.sunlapse_apply_lamp",
+                  "clip.sunlapse_setup_ar",
                   "clip.sunlapse_to_sun_position", "clip.sunlapse_export")
 
 

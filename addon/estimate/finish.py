@@ -143,7 +143,9 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"shades them or the other way round, whatever the Sun (a true model "
                      f"leaves under {calibration.MODEL_MISFIT_MAX:.0%}); a caster or the "
                      f"camera is off in the model, which biases every frame's Sun. Check "
-                     f"the casters' places and sizes against the footage")
+                     f"the casters' places and sizes against the footage"
+                     + ("" if options.refine_model else
+                        ", or let the clip refine them (Refine Model, --refine-model)"))
     seldom_measured = calibrated and calibration.clip_doubted(share)
     model_doubted = calibrated and model_off
     doubted = seldom_measured or model_doubted
