@@ -1294,6 +1294,12 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
                          "seconds": result.timing.get("table_s", 0.0)
                          + result.timing.get("reference_s", 0.0),
                          "message": "the best-supported frame of the whole-clip path"}
+        refined = result.model_refinement
+        if refined is not None and refined.status == native.ModelRefineStatus.REFINED:
+            # Unmodelled shadows are looked for against the model the
+            # estimate ran on.
+            scene = native.corrected_scene(scene, refined)
+            camera = native.corrected_camera(camera, refined.camera)
         _note(track, scene, camera, reads.samples, by_frame, options)
     elif result.message:
         track.report("estimate", trackfile.ProblemKind.FAILED, result.message)
