@@ -157,6 +157,9 @@ def check_flags(args):
                                                and args.frame_seconds > 0):
         fail(EXIT_USAGE, f"--frame-seconds {args.frame_seconds} is not a positive number of "
                          f"seconds (0 would put every frame at one instant)")
+    if args.refine_model and args.method == "thesis":
+        fail(EXIT_USAGE, "--refine-model refines the model for the default method; the thesis "
+                         "baseline (--method thesis) runs on the model as it is")
     if args.apply_model_corrections and not args.refine_model:
         fail(EXIT_USAGE, "--apply-model-corrections needs --refine-model (the corrections "
                          "come from refining the model by the clip)")

@@ -197,7 +197,9 @@ def draw_estimate(self, context):
     layout.prop(s, "times_file", text="Times File")
     if clip is not None and clip.source == "SEQUENCE":
         layout.prop(s, "use_exif_times")
-    layout.prop(s, "refine_model")
+    row = layout.row()
+    row.active = s.method == "default"  # the thesis baseline runs on the model as it is
+    row.prop(s, "refine_model")
     draw_model_refinement(layout, context)
     col = layout.column(align=True)
     col.use_property_split = False

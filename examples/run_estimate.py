@@ -52,7 +52,7 @@ Flags:
                         calibration (bench/calibrate.py). The track's
                         method.confidence says which one a file holds
   --refine-model        refine the hand-made model by the clip first (static
-                        cameras): each object in view moved, turned and
+                        cameras; the default method only): each object in view moved, turned and
                         scaled, the camera turned and zoomed, so that the
                         model's edges fall on the edges that stay put in the
                         footage; used only where the model is clearly off

@@ -52,6 +52,14 @@ def test_applying_corrections_needs_the_refinement(long_plaza, tmp_path):
     assert proc.returncode == 2
     assert any("--apply-model-corrections needs --refine-model" in line
                for line in error_lines(proc)), proc.stderr
+    # The thesis baseline runs on the model as it is: asking to refine it
+    # is a usage error, not a flag silently ignored.
+    proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "t.sun.json"),
+                        "--refine-model", "--method", "thesis")
+    assert proc.returncode == 2
+    assert any("--refine-model" in line and "thesis" in line
+               for line in error_lines(proc)), proc.stderr
+    assert not os.path.exists(str(tmp_path / "t.sun.json"))
 
 
 def _scene_with_a_box_and_a_camera(scene):
