@@ -347,7 +347,7 @@ def camera_solve(context, obj) -> Optional[Tuple[str, bool]]:
     return words, False
 
 
-def _animated(obj) -> bool:
+def driven(obj) -> bool:
     """Whether anything could move the camera: keys, drivers or constraints
     on it or a parent, or keys on its lens."""
     while obj is not None:
@@ -362,7 +362,7 @@ def camera_motion(context, obj, frames) -> Optional[str]:
     None when it stays put: evaluated (keys, constraints, parents, a
     camera solve) on frames spread over them; the current frame is put back."""
     if obj is None or obj.type != "CAMERA" or not (
-            _animated(obj) or obj.data.animation_data is not None):
+            driven(obj) or obj.data.animation_data is not None):
         return None
     scene = context.scene
     now = scene.frame_current

@@ -15,10 +15,6 @@ from ..core.trackfile import Track
 from . import gather, store
 
 
-def _driven(obj) -> bool:
-    return gather._animated(obj)
-
-
 def apply_corrections(context, track: Track) -> Tuple[str, List[str]]:
     """Applies the stored track's corrections to the objects and camera.
     Returns (what was done, in a sentence; what was skipped, one entry
@@ -40,7 +36,7 @@ def apply_corrections(context, track: Track) -> Tuple[str, List[str]]:
             skipped.append(f"'{o.name}': not an object of this file (a part of an "
                            f"instance, or renamed)")
             continue
-        if _driven(obj):
+        if gather.driven(obj):
             skipped.append(f"'{o.name}': keys, drivers or constraints drive its transform")
             continue
         m = np.array(obj.matrix_world, dtype=float)
@@ -51,7 +47,7 @@ def apply_corrections(context, track: Track) -> Tuple[str, List[str]]:
     camera_done = False
     if cam is None or cam.type != "CAMERA":
         skipped.append("the camera: not found in this file")
-    elif _driven(cam) or cam.data.animation_data is not None:
+    elif gather.driven(cam) or cam.data.animation_data is not None:
         skipped.append(f"the camera '{cam.name}': keys, drivers or constraints drive it")
     else:
         m = np.array(cam.matrix_world, dtype=float)

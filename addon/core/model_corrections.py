@@ -5,7 +5,7 @@ world matrices (bpy-free; blender/model_fix.py applies them)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence, Tuple
+from typing import List, Optional, Sequence
 
 import numpy as np
 
@@ -16,9 +16,6 @@ from .trackfile import Track
 class ObjectCorrection:
     name: str                 # the model object's name (method.options.model_objects)
     transform: np.ndarray     # 4x4 world transform p -> p'
-    move_m: float             # how far its pivot moved along the ground
-    turn_deg: float
-    scale: Tuple[float, float, float]
 
 
 @dataclass
@@ -51,10 +48,7 @@ def corrections_of(track: Track) -> Optional[Corrections]:
         if not o.get("refined") or not 0 <= i < len(names):
             continue
         out.objects.append(ObjectCorrection(
-            name=names[i], transform=np.asarray(o["transform"], dtype=float),
-            move_m=float(np.hypot(*o.get("move_in_world_m", (0.0, 0.0)))),
-            turn_deg=float(o.get("turn_deg", 0.0)),
-            scale=tuple(float(s) for s in o.get("scale", (1.0, 1.0, 1.0)))))  # type: ignore
+            name=names[i], transform=np.asarray(o["transform"], dtype=float)))
     return out
 
 

@@ -270,6 +270,8 @@ class WholeClipResult:
     # asked, or see model_refinement_note).
     model_refinement: Any = None
     model_refinement_note: Optional[str] = None
+    # The native scene the estimate ran on when the refinement was used.
+    refined_scene: Any = None
 
 
 @dataclass
@@ -712,7 +714,7 @@ class _WholeClip:
         refined = native.refine_model(self.scene, self.work, self.ground_ids, edges)
         self.result.model_refinement = refined
         if refined.status == native.ModelRefineStatus.REFINED:
-            self.scene = native.corrected_scene(self.scene, refined)
+            self.scene = self.result.refined_scene = native.corrected_scene(self.scene, refined)
             self.work = native.corrected_camera(self.work, refined.camera)
 
     def clip_pass(self, kept: Dict[int, np.ndarray]) -> None:
@@ -1294,12 +1296,11 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
                          "seconds": result.timing.get("table_s", 0.0)
                          + result.timing.get("reference_s", 0.0),
                          "message": "the best-supported frame of the whole-clip path"}
-        refined = result.model_refinement
-        if refined is not None and refined.status == native.ModelRefineStatus.REFINED:
+        if result.refined_scene is not None:
             # Unmodelled shadows are looked for against the model the
             # estimate ran on.
-            scene = native.corrected_scene(scene, refined)
-            camera = native.corrected_camera(camera, refined.camera)
+            scene = result.refined_scene
+            camera = native.corrected_camera(camera, result.model_refinement.camera)
         _note(track, scene, camera, reads.samples, by_frame, options)
     elif result.message:
         track.report("estimate", trackfile.ProblemKind.FAILED, result.message)

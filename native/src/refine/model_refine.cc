@@ -32,17 +32,25 @@ double MedianLevel(const cv::Mat& f) {
   return v[v.size() / 2];
 }
 
+// m at (x, y), bilinearly, for x and y inside the image (m >= 2x2).
 float Bilinear(const cv::Mat& m, double x, double y) {
-  x = std::clamp(x, 0.0, m.cols - 1.0);
-  y = std::clamp(y, 0.0, m.rows - 1.0);
-  const int x0 = std::min(static_cast<int>(x), m.cols - 2 < 0 ? 0 : m.cols - 2);
-  const int y0 = std::min(static_cast<int>(y), m.rows - 2 < 0 ? 0 : m.rows - 2);
-  const int x1 = std::min(x0 + 1, m.cols - 1),
-            y1 = std::min(y0 + 1, m.rows - 1);
+  const int x0 = std::min(static_cast<int>(x), m.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), m.rows - 2);
   const double fx = x - x0, fy = y - y0;
-  return static_cast<float>(
-      (1 - fy) * ((1 - fx) * m.at<float>(y0, x0) + fx * m.at<float>(y0, x1)) +
-      fy * ((1 - fx) * m.at<float>(y1, x0) + fx * m.at<float>(y1, x1)));
+  return static_cast<float>((1 - fy) * ((1 - fx) * m.at<float>(y0, x0) +
+                                        fx * m.at<float>(y0, x0 + 1)) +
+                            fy * ((1 - fx) * m.at<float>(y0 + 1, x0) +
+                                  fx * m.at<float>(y0 + 1, x0 + 1)));
+}
+
+// A footprint's axes (columns): its first axis (horizontal), z x it, z.
+Eigen::Matrix3d FootprintAxes(const Eigen::Vector3d& axis) {
+  const Eigen::Vector3d a = axis.normalized();
+  Eigen::Matrix3d axes;
+  axes.col(0) = a;
+  axes.col(1) = Eigen::Vector3d::UnitZ().cross(a);
+  axes.col(2) = Eigen::Vector3d::UnitZ();
+  return axes;
 }
 
 // A point on one of the model's edges, in its object's footprint frame.
@@ -156,10 +164,7 @@ ObjectFrame FrameOf(const std::vector<Eigen::Vector3d>& vertices) {
   const double a = rect.angle * kRadPerDeg;
   ObjectFrame f;
   f.pivot = Eigen::Vector3d(rect.center.x, rect.center.y, z_min);
-  const Eigen::Vector3d axis(std::cos(a), std::sin(a), 0.0);
-  f.axes.col(0) = axis;
-  f.axes.col(1) = Eigen::Vector3d::UnitZ().cross(axis);
-  f.axes.col(2) = Eigen::Vector3d::UnitZ();
+  f.axes = FootprintAxes(Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
   Eigen::AlignedBox3d box;
   for (const auto& v : vertices) box.extend(v);
   f.size_m = box.sizes().maxCoeff();
@@ -266,11 +271,7 @@ void ModelRefineOptions::Check() const {
 }
 
 Eigen::Matrix4d ObjectCorrection::Transform() const {
-  const Eigen::Vector3d a = axis_in_world.normalized();
-  Eigen::Matrix3d axes;
-  axes.col(0) = a;
-  axes.col(1) = Eigen::Vector3d::UnitZ().cross(a);
-  axes.col(2) = Eigen::Vector3d::UnitZ();
+  const Eigen::Matrix3d axes = FootprintAxes(axis_in_world);
   const Eigen::Matrix3d linear =
       Eigen::AngleAxisd(turn_deg * kRadPerDeg, Eigen::Vector3d::UnitZ())
           .toRotationMatrix() *
