@@ -2,6 +2,7 @@
 #include "sunlapse/common/require.h"
 
 #include "sunlapse/common/angles.h"
+#include "sunlapse/common/order_statistics.h"
 #include "sunlapse/common/robust_fit.h"
 
 #include <ceres/ceres.h>
@@ -484,10 +485,8 @@ InitialSunResult EstimateInitialSun(const Scene& scene, const Camera& camera,
       num_objects = std::max(num_objects, scene.object_id_of_triangle(t) + 1);
     }
     std::vector<float> sorted = s.intensity;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
-                     sorted.end());
     out.loss_scale_abs =
-        std::max(1e-4, options.loss_scale * sorted[sorted.size() / 2]);
+        std::max(1e-4, options.loss_scale * MedianInPlace(&sorted));
     out.status = InitialSunResult::Status::kSuccess;
     if (options.method == InitialSunMethod::kThesis) {
       EstimateThesis(scene, s, options, progress, &out);

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sunlapse/common/angles.h"
+#include "sunlapse/common/order_statistics.h"
 #include "sunlapse/common/require.h"
 
 namespace sunlapse {
@@ -28,8 +29,7 @@ double MedianLevel(const cv::Mat& f) {
     for (int x = 0; x < f.cols; x += 4) v.push_back(row[x]);
   }
   if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
+  return MedianInPlace(&v);
 }
 
 // m at (x, y), bilinearly, for x and y inside the image (m >= 2x2).
@@ -69,14 +69,31 @@ struct ObjectFrame {
   double move_sigma_m = 0.0;
 };
 
+// x -> pivot + move + R_z(turn) A diag(scale) A^T (x - pivot), A the
+// footprint's axes: an object's correction. One definition for the fit and
+// for ObjectCorrection::Transform().
+Eigen::Affine3d CorrectionMap(const Eigen::Vector3d& pivot,
+                              const Eigen::Matrix3d& axes,
+                              const Eigen::Vector2d& move, double turn_rad,
+                              const Eigen::Vector3d& scale) {
+  const Eigen::Matrix3d linear =
+      Eigen::AngleAxisd(turn_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+      axes * scale.asDiagonal() * axes.transpose();
+  Eigen::Affine3d map = Eigen::Affine3d::Identity();
+  map.linear() = linear;
+  map.translation() =
+      pivot + Eigen::Vector3d(move.x(), move.y(), 0.0) - linear * pivot;
+  return map;
+}
+
+// A point given in its object's footprint frame, under the fit's
+// parameters o = (move x, move y, turn, log scale along each axis).
 Eigen::Vector3d Corrected(const ObjectFrame& f, const Eigen::Vector3d& local,
                           const double* o) {
-  const Eigen::Vector3d scaled(local.x() * std::exp(o[3]),
-                               local.y() * std::exp(o[4]),
-                               local.z() * std::exp(o[5]));
-  const Eigen::Matrix3d turn =
-      Eigen::AngleAxisd(o[2], Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  return f.pivot + Eigen::Vector3d(o[0], o[1], 0.0) + turn * f.axes * scaled;
+  return CorrectionMap(
+             f.pivot, f.axes, Eigen::Vector2d(o[0], o[1]), o[2],
+             Eigen::Vector3d(std::exp(o[3]), std::exp(o[4]), std::exp(o[5]))) *
+         (f.pivot + f.axes * local);
 }
 
 // The camera's pixel of a world point under a camera correction c = (turn
@@ -226,8 +243,7 @@ cv::Mat StableEdges(const std::vector<cv::Mat>& frames,
     float* out = median.ptr<float>(y);
     for (int x = 0; x < size.width; ++x) {
       for (int i = 0; i < k; ++i) v[i] = magnitudes[i].at<float>(y, x);
-      std::nth_element(v.begin(), v.begin() + k / 2, v.end());
-      out[x] = v[k / 2];
+      out[x] = MedianInPlace(&v);
     }
   }
   cv::Mat edges = cv::Mat::zeros(size, CV_8U);
@@ -271,18 +287,9 @@ void ModelRefineOptions::Check() const {
 }
 
 Eigen::Matrix4d ObjectCorrection::Transform() const {
-  const Eigen::Matrix3d axes = FootprintAxes(axis_in_world);
-  const Eigen::Matrix3d linear =
-      Eigen::AngleAxisd(turn_deg * kRadPerDeg, Eigen::Vector3d::UnitZ())
-          .toRotationMatrix() *
-      axes * scale.asDiagonal() * axes.transpose();
-  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
-  t.topLeftCorner<3, 3>() = linear;
-  t.topRightCorner<3, 1>() =
-      pivot_in_world +
-      Eigen::Vector3d(move_in_world_m.x(), move_in_world_m.y(), 0.0) -
-      linear * pivot_in_world;
-  return t;
+  return CorrectionMap(pivot_in_world, FootprintAxes(axis_in_world),
+                       move_in_world_m, turn_deg * kRadPerDeg, scale)
+      .matrix();
 }
 
 ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,

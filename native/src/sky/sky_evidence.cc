@@ -3,6 +3,7 @@
 
 #include "sunlapse/common/angles.h"
 #include "sunlapse/common/huge_pages.h"
+#include "sunlapse/common/order_statistics.h"
 
 #include <algorithm>
 #include <array>
@@ -509,9 +510,7 @@ int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
     // camera's frame does not see (motion/view_warp.h).
     std::vector<float> sorted = Seen(v);
     if (sorted.empty()) continue;
-    const size_t half = sorted.size() / 2;
-    std::nth_element(sorted.begin(), sorted.begin() + half, sorted.end());
-    const float med = sorted[half];
+    const float med = MedianInPlace(&sorted);
     if (!(med > 1e-4f)) continue;  // black frame
     for (int s = 0; s < S; ++s)
       if (!std::isnan(v[s])) per_sample[s].push_back(v[s] / med);
@@ -532,10 +531,8 @@ int SkyEvidence::SetReference(const std::vector<cv::Mat>& frames) {
       m.reference[s] = std::numeric_limits<float>::quiet_NaN();
       continue;
     }
-    const size_t k = std::min(
-        x.size() - 1, static_cast<size_t>(m.o.reference_quantile * x.size()));
-    std::nth_element(x.begin(), x.begin() + k, x.end());
-    m.reference[s] = std::max(1e-4f, x[k]);
+    m.reference[s] =
+        std::max(1e-4f, QuantileInPlace(&x, m.o.reference_quantile));
   }
   return used;
 }
@@ -632,8 +629,7 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   }
   std::vector<float> sorted = Seen(v);
   const int seen = static_cast<int>(sorted.size());
-  std::nth_element(sorted.begin(), sorted.begin() + seen / 2, sorted.end());
-  const float med = sorted[seen / 2];
+  const float med = MedianInPlace(&sorted);
   int saturated = 0;
   for (float x : v) saturated += x >= 0.98f;
   if (!(med > 2e-3f) || saturated > 0.9 * seen) {
@@ -692,9 +688,7 @@ FrameEvidence SkyEvidence::AddFrame(const cv::Mat& frame,
   }
   double noise = 1e-6;
   if (!diffs.empty()) {
-    std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2,
-                     diffs.end());
-    const double sigma = 1.4826 * diffs[diffs.size() / 2] / std::sqrt(2.0);
+    const double sigma = 1.4826 * MedianInPlace(&diffs) / std::sqrt(2.0);
     noise = std::max(1e-6, sigma * sigma);
   }
   std::vector<float> rf(r.begin(), r.end());

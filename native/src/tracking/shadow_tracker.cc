@@ -12,6 +12,7 @@
 #include "casters.h"
 #include "sunlapse/common/angles.h"
 #include "sunlapse/common/huge_pages.h"
+#include "sunlapse/common/order_statistics.h"
 #include "sunlapse/common/robust_fit.h"
 
 namespace sunlapse {
@@ -459,8 +460,7 @@ struct ShadowTracker::Impl {
     if (fit.residual.empty()) return kInf;
     std::vector<double> r(fit.residual.size());
     for (size_t i = 0; i < r.size(); ++i) r[i] = std::abs(fit.residual[i]);
-    std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
-    const double noise = std::max(1e-6, 1.4826 * r[r.size() / 2]);
+    const double noise = std::max(1e-6, 1.4826 * MedianInPlace(&r));
     const double to_chi2 = scale * scale / (noise * noise);
     const double c0 = fit.cost;
     Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - d.z() * d;
@@ -517,8 +517,8 @@ struct ShadowTracker::Impl {
           around[k++] = o.normalize_albedo ? v / ground[g].albedo : v;
         }
       }
-      std::nth_element(around, around + k / 2, around + k);
-      residual[i] = fit.residual[i] + (k > 0 ? around[k / 2] - y : 0.0);
+      residual[i] = fit.residual[i] +
+                    (k > 0 ? MedianInPlace(around, around + k) - y : 0.0);
     }
     double m = 0.1, var = 0.0625 * step * step;
     const double n = static_cast<double>(residual.size());
@@ -770,10 +770,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   std::vector<float>& sorted = s.init_sorted;
   ReserveHuge(&sorted, seen);
   sorted.assign(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(seen));
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
-                   sorted.end());
-  const double scale =
-      std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
+  const double scale = std::max(1e-4, s.o.loss_scale * MedianInPlace(&sorted));
   AffineFit& fit = s.init_fit;
   ReserveHuge(&fit.residual, seen);
   RobustAffineFit(static_cast<int>(seen), x.data(), y.data(), nullptr, 1, scale,
@@ -892,10 +889,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
     return finish(pred);
   }
   std::vector<float> sorted = s.band_y;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2,
-                   sorted.end());
-  const double scale =
-      std::max(1e-4, s.o.loss_scale * sorted[sorted.size() / 2]);
+  const double scale = std::max(1e-4, s.o.loss_scale * MedianInPlace(&sorted));
   // The search starts at twice the last frame's correction of the prediction
   // (a steady Sun needs few evaluations), at most search_step_deg.
   // A given prediction (a whole-clip path's grid cell) may be a few degrees

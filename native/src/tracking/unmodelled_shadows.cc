@@ -1,4 +1,5 @@
 #include "sunlapse/tracking/unmodelled_shadows.h"
+#include "sunlapse/common/order_statistics.h"
 #include "sunlapse/common/require.h"
 
 #include <algorithm>
@@ -29,8 +30,7 @@ float MaskedMedian(const cv::Mat1f& m, const cv::Mat1b& mask) {
     }
   }
   if (v.empty()) return 0.f;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
+  return MedianInPlace(&v);
 }
 
 // The mean of `values` over the `lit` pixels in a win x win window around
@@ -203,8 +203,7 @@ UnmodelledShadows DetectUnmodelledShadows(const cv::Mat& frame,
     // The upper quartile of the rim: part of a rim may run along the model's
     // shadow or the ground's border, where no edge of its own is seen.
     std::vector<float>& r = rim[l];
-    std::nth_element(r.begin(), r.begin() + 3 * r.size() / 4, r.end());
-    const double contrast = r[3 * r.size() / 4] / e_median;
+    const double contrast = QuantileInPlace(&r, 0.75) / e_median;
     if (contrast < o.min_edge_contrast) continue;
     UnmodelledShadow s;
     s.area_px = area;
