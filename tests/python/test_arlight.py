@@ -46,6 +46,37 @@ def test_measure_finds_the_shadow_ratio_despite_a_misplaced_edge():
     assert arlight.measure_shadow_balance(img, ground, np.zeros((h, w), bool)) is None
 
 
+def test_measure_is_not_darkened_by_heavy_grain():
+    """A dusk frame's grain (each pixel's level 60% off its neighbours',
+    skewed as a dim sensor's is) must not bias the ratio: the lit side's
+    dark pixels are not taken for shadow, nor the shadow's bright ones for
+    lit ground."""
+    rng = np.random.default_rng(7)
+    h, w = 90, 160
+    lit = np.array([0.30, 0.32, 0.35])
+    ratio = np.array([0.25, 0.27, 0.30])
+    grain = rng.gamma(shape=1 / 0.6 ** 2, scale=0.6 ** 2, size=(h, w, 1))  # mean 1, sd 0.6
+    img = np.tile(lit, (h, w, 1)) * grain
+    shadow = np.zeros((h, w), bool)
+    shadow[30:60, 40:100] = True
+    img[shadow] *= ratio
+    # The medians of the grain on each side, as a noise-free measure sees them.
+    expected = ratio * np.median(grain[shadow]) / np.median(grain[~shadow])
+    b = arlight.measure_shadow_balance(img, np.ones((h, w), bool), shadow)
+    assert b is not None
+    assert np.allclose(b.shadow_ratio, expected, rtol=0.08), (b.shadow_ratio, expected)
+
+
+def test_box_mean_averages_each_square_with_the_border_repeated():
+    img = np.arange(12, dtype=float).reshape(3, 4)
+    out = arlight.box_mean(img, 1)
+    assert out.shape == img.shape
+    assert out[1, 1] == pytest.approx(img[0:3, 0:3].mean())
+    corner = np.pad(img, 1, mode="edge")[0:3, 0:3].mean()
+    assert out[0, 0] == pytest.approx(corner)
+    assert np.array_equal(arlight.box_mean(img, 0), img)
+
+
 def test_sky_seen_counts_blocked_directions():
     dirs = arlight.cosine_directions(256)
     assert np.allclose(np.linalg.norm(dirs, axis=1), 1.0, atol=1e-6) and (dirs[:, 2] > 0).all()
