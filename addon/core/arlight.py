@@ -29,9 +29,10 @@ MIN_RATIO, MAX_RATIO = 0.02, 0.95
 # Fewest pixels on each side for a measurement.
 MIN_PIXELS = 6
 # Pixels are told lit or shaded by their neighbourhood's mean over a square
-# of this radius: a dim or high-gain frame's grain (a pixel's level 40-80%
-# off its neighbours' at dusk) put the lit pixels' dark tail on the shaded
-# side and the reverse, and the ratio came out 20-35% too dark.
+# of this radius: a textured ground's and a dim frame's pixel-to-pixel
+# variation (a pixel's level 40-80% off its neighbours') put the lit pixels'
+# dark tail on the shaded side and the reverse, and the ratio came out
+# 20-35% too dark.
 CLASSIFY_RADIUS_PX = 1
 # Frames' measurements are smoothed by a running median over this many
 # measured neighbours: it keeps a ramp (dusk, an exposure change) and a step
