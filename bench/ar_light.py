@@ -28,9 +28,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BLENDER_ENV = dict(os.environ, PATH="/usr/bin:" + os.environ.get("PATH", ""))
 TOLERANCE = 0.05
 # A "real shadow" (the model's shadow toward the true Sun) at least this
-# bright against the ground beside it is not one the footage shows: its lit
-# side lies in another shadow or on brighter ground (twilight5's long low-Sun
-# shadows over striped paving). The frame is listed, not scored.
+# bright against the ground beside it is not one this measure can read
+# (twilight5's kiosk's long low-Sun shadow on striped wood, 8 frames). The
+# frame is listed, not scored.
 REAL_SHADOW_MAX = 0.98
 DEFAULT_SCENES = ",".join(f"twilight{i}" for i in range(1, 9))
 

@@ -69,31 +69,28 @@ struct ObjectFrame {
   double move_sigma_m = 0.0;
 };
 
-// x -> pivot + move + R_z(turn) A diag(scale) A^T (x - pivot), A the
-// footprint's axes: an object's correction. One definition for the fit and
-// for ObjectCorrection::Transform().
-Eigen::Affine3d CorrectionMap(const Eigen::Vector3d& pivot,
-                              const Eigen::Matrix3d& axes,
-                              const Eigen::Vector2d& move, double turn_rad,
-                              const Eigen::Vector3d& scale) {
-  const Eigen::Matrix3d linear =
-      Eigen::AngleAxisd(turn_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
-      axes * scale.asDiagonal() * axes.transpose();
-  Eigen::Affine3d map = Eigen::Affine3d::Identity();
-  map.linear() = linear;
-  map.translation() =
-      pivot + Eigen::Vector3d(move.x(), move.y(), 0.0) - linear * pivot;
-  return map;
+// An object's correction of a point given in its footprint frame (local =
+// A^T (x - pivot), A the footprint's axes): scaled along the axes, turned
+// about the vertical, moved along the ground. One definition for the fit
+// (per point, in the residuals: no matrix built there) and for
+// ObjectCorrection::Transform().
+Eigen::Vector3d CorrectedPoint(const Eigen::Vector3d& pivot,
+                               const Eigen::Matrix3d& axes,
+                               const Eigen::Vector2d& move, double turn_rad,
+                               const Eigen::Vector3d& scale,
+                               const Eigen::Vector3d& local) {
+  const double c = std::cos(turn_rad), s = std::sin(turn_rad);
+  const Eigen::Vector3d a = axes * scale.cwiseProduct(local);
+  return pivot + Eigen::Vector3d(move.x() + c * a.x() - s * a.y(),
+                                 move.y() + s * a.x() + c * a.y(), a.z());
 }
 
-// A point given in its object's footprint frame, under the fit's
-// parameters o = (move x, move y, turn, log scale along each axis).
+// The fit's parameters o = (move x, move y, turn, log scale along each axis).
 Eigen::Vector3d Corrected(const ObjectFrame& f, const Eigen::Vector3d& local,
                           const double* o) {
-  return CorrectionMap(
-             f.pivot, f.axes, Eigen::Vector2d(o[0], o[1]), o[2],
-             Eigen::Vector3d(std::exp(o[3]), std::exp(o[4]), std::exp(o[5]))) *
-         (f.pivot + f.axes * local);
+  return CorrectedPoint(
+      f.pivot, f.axes, Eigen::Vector2d(o[0], o[1]), o[2],
+      Eigen::Vector3d(std::exp(o[3]), std::exp(o[4]), std::exp(o[5])), local);
 }
 
 // The camera's pixel of a world point under a camera correction c = (turn
@@ -287,9 +284,20 @@ void ModelRefineOptions::Check() const {
 }
 
 Eigen::Matrix4d ObjectCorrection::Transform() const {
-  return CorrectionMap(pivot_in_world, FootprintAxes(axis_in_world),
-                       move_in_world_m, turn_deg * kRadPerDeg, scale)
-      .matrix();
+  // The map is affine: its matrix from the images of the origin and the
+  // unit points.
+  const Eigen::Matrix3d axes = FootprintAxes(axis_in_world);
+  auto image = [&](const Eigen::Vector3d& x) {
+    return CorrectedPoint(pivot_in_world, axes, move_in_world_m,
+                          turn_deg * kRadPerDeg, scale,
+                          axes.transpose() * (x - pivot_in_world));
+  };
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  const Eigen::Vector3d origin = image(Eigen::Vector3d::Zero());
+  for (int j = 0; j < 3; ++j)
+    t.block<3, 1>(0, j) = image(Eigen::Vector3d::Unit(j)) - origin;
+  t.topRightCorner<3, 1>() = origin;
+  return t;
 }
 
 ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
