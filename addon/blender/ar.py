@@ -21,7 +21,7 @@ from mathutils import Vector
 from . import compat, gather, job, keys, store
 from ..core import angles, arlight
 from ..core.trackfile import Sunlight
-from ..estimate import errors, frames as clip_frames, notes
+from ..estimate import errors, frames as clip_frames, native_loader, notes
 
 WORLD_NAME = "sunlapse sky"
 # A long clip's light is measured on this many frames spread over it (and
@@ -168,6 +168,7 @@ def measure_light(context, track, frames, progress=None):
     if not ids or not frames:
         return [], 1.0, 1.0, names
     scene_n, camera_n = gather.build_scene(model), gather.build_camera(cam)
+    native = native_loader.require()
     stride = max(1, round(camera_n.width / LIGHT_WIDTH))
     try:
         source = clip_frames.FrameSource(
@@ -192,7 +193,9 @@ def measure_light(context, track, frames, progress=None):
                                                   track.north_offset_deg)
         ground, shadow = notes.ground_and_model_shadow(scene_n, camera_n, ids, tuple(sun),
                                                        settings.ignore_top_rows, stride)
-        rgb = arlight.srgb_to_linear(bgr[::stride, ::stride, ::-1] / 255.0)
+        # Each reduced pixel the mean of the block around the pixel the masks
+        # cast through: a point sample kept a large still's grain.
+        rgb = native.linear_block_means(bgr, stride, arlight.SRGB_TO_LINEAR_TABLE)[..., ::-1]
         sample = arlight.LightSample(f, est.zenith_deg, est.sunlight)
         if est.sunlight == Sunlight.NO:
             sample.ground_linear = arlight.ground_level(rgb, ground > 0)

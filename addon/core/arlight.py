@@ -79,6 +79,11 @@ def box_mean(image: np.ndarray, r: int) -> np.ndarray:
     return (table[k:, k:] - table[:-k, k:] - table[k:, :-k] + table[:-k, :-k]) / (k * k)
 
 
+# sRGB code value -> linear: the table the frames are read through
+# (native linear_block_means).
+SRGB_TO_LINEAR_TABLE = srgb_to_linear(np.arange(256) / 255.0).astype(np.float32)
+
+
 def dilate(mask: np.ndarray, r: int) -> np.ndarray:
     return _shift_or(mask.astype(bool), r) if r > 0 else mask.astype(bool)
 

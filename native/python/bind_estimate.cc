@@ -483,6 +483,29 @@ void BindEstimate(py::module_& m) {
       "ground/model_shadow uint8 (H,W) masks.");
 
   m.def(
+      "linear_block_means",
+      [](const py::array& image, int stride, const py::array& table) {
+        CheckArray<uint8_t>(image, "image", {-1, -1, 3});
+        const float* t = CheckArray<float>(table, "table", {256});
+        const cv::Mat in(static_cast<int>(image.shape(0)),
+                         static_cast<int>(image.shape(1)), CV_8UC3,
+                         const_cast<void*>(image.data()));
+        const cv::Mat lut(1, 256, CV_32F, const_cast<float*>(t));
+        cv::Mat out;
+        {
+          py::gil_scoped_release release;
+          out = CentredBlockMeans(in, stride, lut);
+        }
+        return MatAsArray(out);
+      },
+      py::arg("image").noconvert(), py::arg("stride"),
+      py::arg("table").noconvert(),
+      "uint8 (H,W,3) -> float32 of the size of image[::stride, ::stride]: "
+      "each value read through `table` (256 float32, e.g. sRGB -> linear) "
+      "and averaged over the stride x stride block centred on full-size "
+      "pixel (i*stride, j*stride), the border repeated.");
+
+  m.def(
       "to_linear_gray",
       [](const py::array& bgr, double gamma) {
         CheckArray<uint8_t>(bgr, "image", {-1, -1, 3});

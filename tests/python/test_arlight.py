@@ -152,3 +152,44 @@ def test_a_renderer_brighter_under_the_sun_than_lambert_is_corrected_by_its_chec
     assert arlight.response_at(corrections, 60.0) == pytest.approx((2 ** 0.5, 2 ** 0.5, 1.0))
     assert arlight.response_at(corrections, 85.0) == pytest.approx((2.0, 2.0, 1.0))
     assert arlight.response_at(None, 20.0) == (1.0, 1.0, 1.0)
+
+
+def _grainy_still(rng, stride, lit_code, shadow_code, grain_codes):
+    """A dim still at full size: sRGB codes with the sensor's grain added in
+    code values (uniform, as ffmpeg's noise filter adds it), a shadow in the
+    middle; and where the masks look, one full-size pixel per reduced one."""
+    h, w = 45 * stride, 80 * stride
+    shadow = np.zeros((h, w), bool)
+    shadow[15 * stride:30 * stride, 20 * stride:60 * stride] = True
+    codes = np.where(shadow, shadow_code, lit_code)[..., None] + \
+        rng.uniform(-grain_codes, grain_codes, size=(h, w, 3))
+    bgr = np.clip(np.rint(codes), 0, 255).astype(np.uint8)
+    return bgr, shadow, shadow[::stride, ::stride]
+
+
+def test_a_large_stills_ratio_is_the_one_a_smaller_frame_shows():
+    """Reduced by block means (native linear_block_means), a 20-45 MP still's
+    shadow ratio is the one its pixels average to, as a frame of the
+    reduced size shows it. Point samples kept each pixel's grain: here their
+    medians gave 0.48-0.57 by channel for 0.53."""
+    native = pytest.importorskip("_native")
+    stride = 8
+    bgr, shadow_full, shadow = _grainy_still(np.random.default_rng(11), stride, 42, 28, 20)
+    linear_full = arlight.SRGB_TO_LINEAR_TABLE[bgr[..., ::-1]].astype(np.float64)
+    expected = linear_full[shadow_full].mean(axis=0) / linear_full[~shadow_full].mean(axis=0)
+    ground = np.ones(shadow.shape, bool)
+    rgb = native.linear_block_means(bgr, stride, arlight.SRGB_TO_LINEAR_TABLE)[..., ::-1]
+    assert rgb.shape == bgr[::stride, ::stride].shape and rgb.dtype == np.float32
+    b = arlight.measure_shadow_balance(rgb, ground, shadow)
+    assert b is not None
+    assert np.allclose(b.shadow_ratio, expected, rtol=0.03), (b.shadow_ratio, expected)
+
+
+def test_linear_block_means_names_what_it_was_given():
+    native = pytest.importorskip("_native")
+    with pytest.raises(ValueError, match="image"):
+        native.linear_block_means(np.zeros((4, 4, 3), np.float32), 2, arlight.SRGB_TO_LINEAR_TABLE)
+    with pytest.raises(ValueError, match="table"):
+        native.linear_block_means(np.zeros((4, 4, 3), np.uint8), 2, np.zeros(10, np.float32))
+    with pytest.raises(ValueError, match="stride"):
+        native.linear_block_means(np.zeros((4, 4, 3), np.uint8), 0, arlight.SRGB_TO_LINEAR_TABLE)

@@ -12,9 +12,11 @@
 #include <string>
 #include <vector>
 
+#include <tbb/parallel_for.h>
 #include <opencv2/imgproc.hpp>
 
 #include "jpeg_scaled.h"
+#include "sunlapse/common/require.h"
 #include "tiff_plain.h"
 
 extern "C" {
@@ -867,6 +869,45 @@ cv::Mat AreaReduced(const cv::Mat& image, cv::Size size) {
     return out;
   }
   cv::resize(image, out, size, 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+cv::Mat CentredBlockMeans(const cv::Mat& image, int stride,
+                          const cv::Mat& table) {
+  Require(image.depth() == CV_8U && image.channels() >= 1 &&
+              image.channels() <= 4 && !image.empty(),
+          "image: expected a non-empty 8-bit image of 1-4 channels");
+  Require(stride >= 1, "stride must be >= 1");
+  Require(table.type() == CV_32FC1 && table.total() == 256,
+          "table: expected 256 float32 values");
+  cv::Mat out;
+  if (stride == 1) {
+    cv::LUT(image, table, out);
+    return out;
+  }
+  const int h = image.rows, w = image.cols;
+  const int out_h = (h + stride - 1) / stride,
+            out_w = (w + stride - 1) / stride;
+  const int half = stride / 2;
+  // Columns [-half, out_w * stride - half) of the image, the border repeated.
+  const int right = out_w * stride - half - w;
+  const cv::Mat cols = right >= 0 ? image : image.colRange(0, w + right);
+  out.create(out_h, out_w, CV_32FC(image.channels()));
+  constexpr int kBandRows = 32;
+  const int bands = (out_h + kBandRows - 1) / kBandRows;
+  tbb::parallel_for(0, bands, [&](int b) {
+    const int r0 = b * kBandRows, r1 = std::min(out_h, r0 + kBandRows);
+    const int y0 = r0 * stride - half, y1 = r1 * stride - half;
+    const int top = std::max(0, -y0), bottom = std::max(0, y1 - h);
+    cv::Mat padded, linear, reduced;
+    cv::copyMakeBorder(cols.rowRange(std::max(0, y0), std::min(h, y1)), padded,
+                       top, bottom, half, std::max(0, right),
+                       cv::BORDER_REPLICATE);
+    cv::LUT(padded, table, linear);
+    // An exact integer factor: INTER_AREA's value is each block's mean.
+    cv::resize(linear, reduced, cv::Size(out_w, r1 - r0), 0, 0, cv::INTER_AREA);
+    reduced.copyTo(out.rowRange(r0, r1));
+  });
   return out;
 }
 

@@ -681,5 +681,41 @@ TEST(VideoReader, LinearGrayUndoesGamma) {
   EXPECT_NEAR(ToLinearGray(img, 1.0).at<float>(0, 0), 128 / 255.0, 1e-6);
 }
 
+// Reduced pixel (i, j) stands for full-size pixel (i * stride, j * stride):
+// its block is centred there (a point sample would see only that pixel),
+// averaged after the table, with the border repeated.
+TEST(VideoReader, CentredBlockMeansAverageAroundTheSampledPixel) {
+  const cv::Mat squared = [] {
+    cv::Mat t(1, 256, CV_32F);
+    for (int v = 0; v < 256; ++v) t.at<float>(0, v) = float(v * v);
+    return t;
+  }();
+  constexpr int kStride = 8;
+  cv::Mat img(37, 61, CV_8UC3, cv::Scalar(0, 0, 0));  // not multiples of 8
+  // Beside full-size pixel (16, 24), inside the block of reduced (2, 3) but
+  // not its sampled pixel; one 200 in its 64.
+  img.at<cv::Vec3b>(2 * kStride + 3, 3 * kStride - 4) = cv::Vec3b(200, 10, 0);
+  const cv::Mat out = CentredBlockMeans(img, kStride, squared);
+  ASSERT_EQ(out.type(), CV_32FC3);
+  EXPECT_EQ(out.rows, (37 + kStride - 1) / kStride);
+  EXPECT_EQ(out.cols, (61 + kStride - 1) / kStride);
+  const cv::Vec3f v = out.at<cv::Vec3f>(2, 3);
+  EXPECT_NEAR(v[0], 200.f * 200.f / 64.f, 1e-2);  // the mean of the squares
+  EXPECT_NEAR(v[1], 100.f / 64.f, 1e-3);
+  EXPECT_EQ(cv::countNonZero(out.reshape(1) != 0.f), 2);
+  // A uniform frame stays uniform to its edges (the border repeated).
+  const cv::Mat flat = CentredBlockMeans(
+      cv::Mat(37, 61, CV_8UC3, cv::Scalar(3, 3, 3)), kStride, squared);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(flat.reshape(1), &lo, &hi);
+  EXPECT_FLOAT_EQ(lo, 9.f);
+  EXPECT_FLOAT_EQ(hi, 9.f);
+  // Stride 1 is the table alone.
+  EXPECT_FLOAT_EQ(CentredBlockMeans(img, 1, squared)
+                      .at<cv::Vec3f>(2 * kStride + 3, 3 * kStride - 4)[0],
+                  40000.f);
+  EXPECT_THROW(CentredBlockMeans(img, 0, squared), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace sunlapse

@@ -152,6 +152,16 @@ class VideoReader {
 // itself when it has that size already.
 cv::Mat AreaReduced(const cv::Mat& image, cv::Size size);
 
+// 8-bit `image` (1-4 channels) read through `table` (1 x 256 CV_32F, a
+// transfer function: linear light) and averaged over stride x stride blocks
+// each centred on full-size pixel (i * stride, j * stride), the border
+// repeated: float32 of the size of image[::stride, ::stride]. Where a
+// reduced pixel stands for the ray through that full-size pixel (a mask cast
+// at those pixels), a point sample kept a 20-45 MP still's grain and this
+// keeps the mean. Made in bands of rows (memory of a band, not a frame).
+cv::Mat CentredBlockMeans(const cv::Mat& image, int stride,
+                          const cv::Mat& table);
+
 // 8-bit BGR (or gray) -> single-channel float32 in [0, 1], with the display
 // gamma undone (value^gamma; gamma 1 keeps the encoded values).
 cv::Mat ToLinearGray(const cv::Mat& image, double gamma = kDisplayGamma);
