@@ -316,6 +316,23 @@ def _running_median(rows: np.ndarray, window: int) -> np.ndarray:
     return out
 
 
+def _sunlit_runs(lit: Sequence[Tuple[LightSample, ShadowBalance]],
+                 samples: Sequence[LightSample]) -> List[List[Tuple[LightSample, ShadowBalance]]]:
+    """The sunlit measurements (in frame order) split where a frame measured
+    without sunlight lies between two of them: the running median stays on
+    its side of a cloud or a night. Across one, the frames thinning into the
+    cloud took the full Sun's balance of the frames beyond it, and their
+    inserts' shadows came out 0.1-0.2 too dark."""
+    dark = sorted(s.frame for s in samples if s.sunlight == Sunlight.NO)
+    runs: List[List[Tuple[LightSample, ShadowBalance]]] = []
+    for sb in lit:
+        if runs and not any(runs[-1][-1][0].frame < f < sb[0].frame for f in dark):
+            runs[-1].append(sb)
+        else:
+            runs.append([sb])
+    return runs
+
+
 def light_per_frame(samples: Sequence[LightSample], sky_seen_in_shadow: float,
                     sky_seen_lit: float,
                     corrections: Optional[Sequence[Tuple[float, Sequence[float]]]] = None,
@@ -326,7 +343,8 @@ def light_per_frame(samples: Sequence[LightSample], sky_seen_in_shadow: float,
     Where the frame has direct sunlight (or may have: a measured shadow is
     evidence of it), the Sun-to-sky balance and the lit ground's brightness
     follow the frames' own, through a running median in frame order (dusk
-    dims the Sun against the sky, an exposure ramp brightens the plate).
+    dims the Sun against the sky, an exposure ramp brightens the plate)
+    that stays on its side of a frame measured without sunlight.
     Where it has none, the lamp is off and the sky alone lights the ground
     as bright as the footage shows it. `corrections`, (zenith deg, the
     renderer's Sun response RGB) pairs from check renders (sun_response),
@@ -337,14 +355,14 @@ def light_per_frame(samples: Sequence[LightSample], sky_seen_in_shadow: float,
                   if s.balance is not None and s.sunlight != Sunlight.NO),
                  key=lambda sb: sb[0].frame)
     out: Dict[int, FrameLight] = {}
-    if lit:
-        window = min(LIGHT_MEDIAN_WINDOW, len(lit))
+    for run in _sunlit_runs(lit, samples):
+        window = min(LIGHT_MEDIAN_WINDOW, len(run))
         # log: the median of a ratio is the same whichever way it is taken.
         k = np.exp(_running_median(np.log([
             sun_to_sky(b.shadow_ratio, s.zenith_deg, sky_seen_in_shadow, sky_seen_lit)
-            for s, b in lit]), window))
-        level = np.exp(_running_median(np.log([b.lit_linear for _, b in lit]), window))
-        for (s, _), k_s, level_s in zip(lit, k, level):
+            for s, b in run]), window))
+        level = np.exp(_running_median(np.log([b.lit_linear for _, b in run]), window))
+        for (s, _), k_s, level_s in zip(run, k, level):
             ratio = ratio_for(k_s, s.zenith_deg, sky_seen_in_shadow, sky_seen_lit)
             response = np.asarray(response_at(corrections, s.zenith_deg))
             lamp_ratio = ratio_for(k_s / response, s.zenith_deg, sky_seen_in_shadow,

@@ -118,6 +118,24 @@ def test_a_frame_measured_wrong_takes_its_neighbours_light_and_a_step_stays():
     assert got[8:] == pytest.approx([0.6] * 5, abs=1e-6)
 
 
+def test_the_frames_thinning_into_a_cloud_keep_their_own_light():
+    """Full Sun, one frame each side of the cloud with the Sun half through
+    (its shadows fainter), the cloud without sunlight: the median does not
+    reach across the cloud, so the thinning frames are not given the full
+    Sun's balance of the frames beyond it."""
+    ratios = {f: 0.3 for f in list(range(1, 6)) + list(range(11, 16))}
+    ratios[5] = ratios[11] = 0.7
+    samples = [_sample(f, (r,) * 3) for f, r in ratios.items()]
+    samples += [arlight.LightSample(f, 50.0, arlight.Sunlight.NO, ground_linear=(0.1,) * 3)
+                for f in range(6, 11)]
+    got = {x.frame: x.target_ratio for x in arlight.light_per_frame(samples, 1.0, 1.0)}
+    assert got[5] == pytest.approx((0.7,) * 3, abs=1e-6)
+    assert got[11] == pytest.approx((0.7,) * 3, abs=1e-6)
+    assert all(got[f] is None for f in range(6, 11))
+    assert got[3] == pytest.approx((0.3,) * 3, abs=1e-6)
+    assert got[13] == pytest.approx((0.3,) * 3, abs=1e-6)
+
+
 def test_without_sunlight_the_lamp_is_off_and_the_sky_lights_the_ground_as_the_footage():
     dark = arlight.LightSample(5, 95.0, arlight.Sunlight.NO, ground_linear=(0.02, 0.03, 0.05))
     lights = arlight.light_per_frame([_sample(1, (0.3,) * 3), dark], 1.0, 0.9)
