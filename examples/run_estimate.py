@@ -55,8 +55,9 @@ Flags:
                         cameras; the default method only): each object in
                         view moved, turned and scaled, the camera turned and
                         zoomed, so that the model's edges fall on the
-                        edges that stay put in the footage; used only where the model is clearly off
-                        and the fit clearly puts it back. The estimate uses
+                        edges that stay put in the footage; used only where
+                        the model is clearly off and the fit clearly puts it
+                        back. The estimate uses
                         the refined model; the track's extra.model_refinement
                         lists each correction (object_id indexes
                         method.options.model_objects). The .blend is not
