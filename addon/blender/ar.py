@@ -268,12 +268,14 @@ MATCH_FRAMES = 3
 MATCH_MIN_ELEVATION_DEG = 5.0
 
 
-def render_model_shadows(context, frame, mask, casters, inserts):
+def render_model_shadows(context, frame, shadow_mask, lit_mask, casters, inserts):
     """Renders the Shadow Catcher pass of `frame` with the model's casters
     (not the ground) casting instead of catching, the inserts hidden, small;
-    returns the pass's median RGB over `mask` (the pixels measured in the
-    footage, clip size), or None when it cannot be read. The pass goes
-    through a temporary File Output node (the Viewer's pixels are not
+    returns the pass's median RGB over `shadow_mask` against its median over
+    `lit_mask` (the pixels measured in the footage, clip size): the casters
+    hide some sky from the lit ground beside their shadows too, as the real
+    ones do in the footage's ratio. None when it cannot be read. The pass
+    goes through a temporary File Output node (the Viewer's pixels are not
     readable in background mode)."""
     import tempfile
     scene = context.scene
@@ -325,13 +327,14 @@ def render_model_shadows(context, frame, mask, casters, inserts):
                 o.is_shadow_catcher = saved["catch"][o.name]
             for o in inserts:
                 o.hide_render = saved["hide"][o.name]
-    H, W = mask.shape
+    H, W = shadow_mask.shape
     rows = np.minimum(H - 1, (np.arange(h) * H / h).astype(int))
     cols = np.minimum(W - 1, (np.arange(w) * W / w).astype(int))
-    small = mask[rows][:, cols]
-    if small.sum() < arlight.MIN_PIXELS:
+    shadow, lit = shadow_mask[rows][:, cols], lit_mask[rows][:, cols]
+    if shadow.sum() < arlight.MIN_PIXELS or lit.sum() < arlight.MIN_PIXELS:
         return None
-    return tuple(float(v) for v in np.median(px[small], axis=0))
+    beside = np.maximum(np.median(px[lit], axis=0), 1e-6)
+    return tuple(float(v) for v in np.median(px[shadow], axis=0) / beside)
 
 
 def match_render(context, sun_obj, track, samples, vs, vl, model_objects, ground_names):
@@ -358,7 +361,8 @@ def match_render(context, sun_obj, track, samples, vs, vl, model_objects, ground
     inserts = [o for o in bpy.data.objects if gather.is_insert(o)]
     checks, corrections = [], []
     for s in picks:
-        got = render_model_shadows(context, s.frame, s.balance.shadow_mask, casters, inserts)
+        got = render_model_shadows(context, s.frame, s.balance.shadow_mask,
+                                   s.balance.lit_mask, casters, inserts)
         if got is None:
             continue
         corrections.append((s.zenith_deg, arlight.sun_response(got, targets[s.frame],

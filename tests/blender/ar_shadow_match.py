@@ -167,15 +167,20 @@ def measure_frame(preset_dir, frame, work, truth_masks=True, model_casting=False
     measurable = dark.sum() >= arlight.MIN_PIXELS and lit.sum() >= arlight.MIN_PIXELS
     real_ratio = (np.median(plate[dark], axis=0) / np.median(plate[lit], axis=0)
                   if measurable else None)
-    model_ratio = None
+    model_ratio = model_open_ratio = None
     if model_casting and measurable:
-        # The catcher's darkening where the real shadows are, shown on the
-        # lit ground beside them (where an insert's shadow falls on a plate):
-        # display values, as the real ratio.
+        # The catcher's darkening where the real shadows are against its
+        # darkening on the lit ground beside them (the casters hide some
+        # sky from that ground too, as the real ones do from the footage's),
+        # shown on that lit ground: display values, as the real ratio.
         catcher_model = _render_model_casting(scene, frame, work, truth.extra["ground_objects"])
         lit_linear = np.median(arlight.srgb_to_linear(plate[lit]), axis=0)
-        model_ratio = (arlight.linear_to_srgb(lit_linear * np.median(catcher_model[dark], axis=0))
-                       / np.maximum(arlight.linear_to_srgb(lit_linear), 1e-6))
+        darkening = np.median(catcher_model[dark], axis=0)
+        beside = np.maximum(np.median(catcher_model[lit], axis=0), 1e-6)
+        shown = np.maximum(arlight.linear_to_srgb(lit_linear), 1e-6)
+        model_ratio = arlight.linear_to_srgb(lit_linear * darkening / beside) / shown
+        # The same against open ground (the measure before 2026-11-28).
+        model_open_ratio = arlight.linear_to_srgb(lit_linear * darkening) / shown
     # The plate as the composite shows it against the frame the estimate
     # reads (OpenCV): 8-bit display levels.
     from sunlapse.estimate import frames as clip_frames
@@ -185,7 +190,7 @@ def measure_frame(preset_dir, frame, work, truth_masks=True, model_casting=False
     def listed(v):
         return None if v is None else [float(x) for x in v]
     return {"insert": listed(insert_ratio), "real": listed(real_ratio),
-            "model": listed(model_ratio),
+            "model": listed(model_ratio), "model_open": listed(model_open_ratio),
             "plate_vs_reader_mean": float(plate_levels.mean()),
             "plate_vs_reader_max": float(plate_levels.max()),
             "insert_px": int(core.sum()), "real_px": int(dark.sum()), "lit_px": int(lit.sum()),
