@@ -1003,6 +1003,9 @@ def save_user_blend(scene, out, clip_path, lamp, extras, name="scene.blend"):
     scene.use_nodes = False
     scene.world = None
     scene.view_layers[0].use_pass_object_index = False
+    # The masks' render (render_masks) turned bounces off; a user's file has
+    # Blender's own, and the AR render's inserts light their surroundings.
+    scene.cycles.max_bounces = type(scene.cycles).bl_rna.properties["max_bounces"].default
     scene.render.image_settings.color_mode = "RGB"
     scene.view_settings.view_transform = "Filmic"
     clip = bpy.data.movieclips.load(clip_path)

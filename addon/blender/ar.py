@@ -430,6 +430,17 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     # busy for minutes on a preview that needs a few dozen.
     if scene.cycles.preview_samples == 0 or scene.cycles.preview_samples > PREVIEW_SAMPLES:
         scene.cycles.preview_samples = PREVIEW_SAMPLES
+    bounce_note = ""
+    if scene.cycles.max_bounces == 0 or scene.cycles.diffuse_bounces == 0:
+        # The footage's shadows hold light bounced off their casters: under
+        # cloud, a tenth of it beside a wall.
+        note = ("Render Properties > Light Paths: Max Bounces or Diffuse is 0, so the inserts "
+                "bounce no light onto the ground and their shadows come out darker than the "
+                "footage's, most under cloud and at dusk (4 or more is usual)")
+        if warnings is None:
+            bounce_note = ". Warning: " + note
+        else:
+            warnings.append(note)
     step(0.05, "AR setup: the scene and the compositor")
     model = _model_objects(context)
     for obj in model:
@@ -530,7 +541,7 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
                  "; open a 3D View (it looks through the camera, rendered) or render (F12) "
                  "to see it")
     return (f"AR render set up: {len(model)} model objects catch shadows{inserted}{light}"
-            f"{comp_note}{shown}")
+            f"{comp_note}{shown}{bounce_note}")
 
 
 def render_frames(context, folder, frames):

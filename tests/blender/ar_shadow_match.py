@@ -73,6 +73,10 @@ def artist_path(preset_dir, samples=32, estimate=True):
     if not hasattr(bpy.types.Scene, "sunlapse"):
         sys.modules["sunlapse"].register()
     scene = bpy.context.scene
+    if scene.cycles.max_bounces == 0:
+        # Suite scenes rendered before 2026-11-28 kept the mask render's 0
+        # bounces in the user's file; a user's file has Blender's own.
+        scene.cycles.max_bounces = type(scene.cycles).bl_rna.properties["max_bounces"].default
     if estimate:
         assert bpy.ops.clip.sunlapse_estimate() == {"FINISHED"}
     assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}

@@ -312,6 +312,23 @@ def test_the_check_render_compares_a_shadow_with_the_ground_beside_it(tiny_plaza
     assert np.all(np.abs(np.array(got) - vs / vl) <= 0.02), (got, vs, vl)
 
 
+def test_ar_setup_warns_when_the_render_bounces_no_light(estimated):
+    """With Max Bounces at 0 the inserts light nothing around them and their
+    shadows come out darker than the footage's: Set Up AR Render says so,
+    and does not change the user's setting."""
+    from sunlapse.blender import ar
+    assert bpy.ops.clip.sunlapse_apply_lamp() == {"FINISHED"}
+    scene = bpy.context.scene
+    for bounces, warned in ((4, False), (0, True)):
+        scene.cycles.max_bounces = bounces
+        warnings: list = []
+        ar.setup(bpy.context, balance=False, preview=False, warnings=warnings)
+        assert any("Max Bounces" in w for w in warnings) == warned, warnings
+        assert scene.cycles.max_bounces == bounces
+    summary = ar.setup(bpy.context, balance=False, preview=False)
+    assert "Warning: Render Properties > Light Paths" in summary, summary
+
+
 def test_ar_setup_keys_lamp_and_sky_from_the_footage_and_keeps_helpers_out_of_shot(estimated):
     from bpy_extras.object_utils import world_to_camera_view
     from sunlapse.blender import ar
