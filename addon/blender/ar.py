@@ -433,7 +433,7 @@ def setup(context, add_sample_object=True, balance=True, preview=True, warnings=
     bounce_note = ""
     if scene.cycles.max_bounces == 0 or scene.cycles.diffuse_bounces == 0:
         # The footage's shadows hold light bounced off their casters: under
-        # cloud, a tenth of it beside a wall.
+        # cloud, a tenth of it beside a kiosk (docs/accuracy.md).
         note = ("Render Properties > Light Paths: Max Bounces or Diffuse is 0, so the inserts "
                 "bounce no light onto the ground and their shadows come out darker than the "
                 "footage's, most under cloud and at dusk (4 or more is usual)")
