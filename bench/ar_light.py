@@ -12,11 +12,11 @@ The second is an insert whose real shadow the footage shows: its shadow's
 darkening over the real shadow's pixels against its darkening over the lit
 ground beside them (since 2026-11-28; before, against open ground), shown on
 that lit ground, against the footage's shadow/lit ratio there (display
-values, per channel). Prints one line a frame and a summary a scene: frames with the Sun
-at least --min-elevation up whose ratio is within 0.05, the worst; the
-frames whose "real shadow" is not darker than the ground beside it (ratio
->= 0.98: not scored); and the frames the footage shows without a shadow
-(lamp off: the model's ratio 1).
+values, per channel). Prints one line a frame and a summary a scene: frames
+with the Sun at least --min-elevation up whose ratio is within 0.05, the
+worst; the frames whose "real shadow" is not darker than the ground beside
+it (ratio >= 0.98: not scored); and the frames the footage shows without a
+shadow (lamp off: the model's ratio 1).
 Exits 0 whatever the figures (1 when a scene is missing).
 """
 import argparse
