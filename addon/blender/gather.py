@@ -70,7 +70,6 @@ class ClipInfo:
     frame_duration: int
     width: int
     height: int
-    fps: float
     # What the file itself held when probed (native VideoReader), and what
     # the user should hear about it (a shorter file than Blender's cache).
     frames_in_file: Optional[int] = None
@@ -510,7 +509,7 @@ def gather_clip(context, movieclip=None) -> ClipInfo:
     info = ClipInfo(name=clip.name, filepath=path, source=clip.source,
                     frame_start=int(clip.frame_start),
                     frame_duration=int(clip.frame_duration),
-                    width=int(w), height=int(h), fps=float(clip.fps or 0.0))
+                    width=int(w), height=int(h))
     probe_clip(info)
     return info
 

@@ -517,7 +517,7 @@ def test_the_summary_says_the_rest_came_from_smoothing_only_when_some_did(empty_
             raw_azimuth_deg=100.0 if f in measured else None, confidence=0.9)
             for f in (1, 2, 3)])
     clip = gather.ClipInfo(name="c", filepath="/tmp/c.mp4", source="MOVIE", frame_start=1,
-                           frame_duration=3, width=4, height=4, fps=25.0)
+                           frame_duration=3, width=4, height=4)
     every = report.finish_run(bpy.context, track({1, 2, 3}), clip, {})
     assert "(3 measured)" in every and "smoothing" not in every
     some = report.finish_run(bpy.context, track({1, 3}), clip, {})
