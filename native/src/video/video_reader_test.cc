@@ -520,6 +520,38 @@ TEST(VideoReader, SaysWhetherItsFramesDecodeOnTheirOwn) {
   EXPECT_TRUE(VideoReader((d / "s_001.png").string()).frames_independent());
 }
 
+TEST(VideoReader, ReadsAnMp4FromItsHeaderAsFromAProbedMovie) {
+  // A QuickTime/MP4 movie is opened from its header alone (no probing); one
+  // whose header has no frame count (a fragmented MP4) is probed. Each must
+  // give the frames, count and rate a probed container (Matroska) gives.
+  const fs::path d = TempDir("header");
+  const std::string src = NumberedMovie(d, 40);
+  const std::string x264 = " -c:v libx264 -g 10 -bf 2 -pix_fmt yuv420p ";
+  const std::string mkv = (d / "probed.mkv").string();
+  const std::string mp4 = (d / "plain.mp4").string();
+  const std::string frag = (d / "fragmented.mp4").string();
+  if (!Ffmpeg("-i " + src + x264 + mkv) || !Ffmpeg("-i " + src + x264 + mp4) ||
+      !Ffmpeg("-i " + src + x264 + "-movflags +frag_keyframe+empty_moov " +
+              frag)) {
+    GTEST_SKIP() << "ffmpeg with libx264 is not available";
+  }
+  VideoReader probed(mkv);
+  for (const std::string& path : {mp4, frag}) {
+    VideoReader r(path);
+    EXPECT_EQ(r.CountFrames(), 40) << path;
+    EXPECT_DOUBLE_EQ(r.fps(), probed.fps()) << path;
+    EXPECT_EQ(r.width(), 32);
+    EXPECT_EQ(r.height(), 24);
+    cv::Mat f;
+    for (int target : {0, 1, 17, 39, 5}) {
+      ASSERT_TRUE(r.Seek(target)) << path << " " << target;
+      ASSERT_TRUE(r.Read(&f)) << path << " " << target;
+      EXPECT_EQ(r.last_frame().index, target) << path;
+      EXPECT_NEAR(f.at<cv::Vec3b>(12, 16)[0], 2 * target, 4) << path;
+    }
+  }
+}
+
 TEST(VideoReader, SeeksNearToAKeyFrameAtOrBeforeTheTarget) {
   const fs::path d = TempDir("near");
   const std::string src = NumberedMovie(d, 120);
