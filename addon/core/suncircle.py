@@ -63,7 +63,7 @@ def _basis(pole_zenith, pole_azimuth):
     e1 = up - (up @ p) * p
     norm = np.linalg.norm(e1)
     e1 = e1 / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
-    e2 = np.cross(p, e1)
+    e2 = angles.cross(p, e1)
     return p, e1, e2
 
 
@@ -139,23 +139,34 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
     def residuals(pr):
         return ((_model(pr, tw, rate, bases) - s) * np.sqrt(ww * robust)[:, None]).ravel()
 
+    # The residuals and the Jacobian at the current parameters, kept while
+    # they hold: an accepted step's residuals are the next iteration's, and
+    # a rejected step leaves both as they were (most of a fit's cost).
+    r0: Optional[np.ndarray] = None
+    jac: Optional[np.ndarray] = None
     for it in range(iterations):
-        r0 = residuals(params)
-        jac = np.empty((len(r0), len(params)))
-        for k in range(len(params)):
-            d = np.zeros(len(params))
-            d[k] = 1e-6
-            jac[:, k] = (residuals(params + d) - r0) / 1e-6
+        if r0 is None:
+            r0 = residuals(params)
+        if jac is None:
+            jac = np.empty((len(r0), len(params)))
+            for k in range(len(params)):
+                d = np.zeros(len(params))
+                d[k] = 1e-6
+                jac[:, k] = (residuals(params + d) - r0) / 1e-6
         jtj, jtr = jac.T @ jac, jac.T @ r0
         step = np.linalg.lstsq(jtj + lam * np.diag(np.diag(jtj) + 1e-9), -jtr, rcond=None)[0]
-        if float(np.sum(residuals(params + step) ** 2)) < float(np.sum(r0 ** 2)):
-            params, lam = params + step, lam * 0.3
+        trial = params + step
+        r1 = residuals(trial)
+        if float(np.sum(r1 ** 2)) < float(np.sum(r0 ** 2)):
+            params, lam = trial, lam * 0.3
+            r0, jac = r1, None
         else:
             lam *= 10.0
         if it % 10 == 9:  # robust weights (Huber on the angle), refreshed now and then
             ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
             huber = 1.5 * (1.4826 * float(np.median(ang)) + 1e-3)
             robust = np.where(ang <= huber, 1.0, huber / np.maximum(ang, 1e-12))
+            r0, jac = None, None
     fit_all = _model(params, t, rate)
     ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
     p, _, _ = _basis(params[0], params[1])

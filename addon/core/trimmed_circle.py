@@ -145,8 +145,8 @@ def fit_trimmed(times: Sequence[float], suns_in_world: Sequence[Optional[Sequenc
         out.message = fit.message
         return out
     out.success = True
-    out.sun_in_world = [angles.sun_in_world_from_angles(z, a)
-                        for z, a in zip(fit.zenith_deg, fit.azimuth_world_deg)]
+    out.sun_in_world = list(angles.sun_in_world_from_angles(
+        np.asarray(fit.zenith_deg), np.asarray(fit.azimuth_world_deg)))
     out.off_deg = [None if suns_in_world[i] is None else
                    angles.angle_between_deg(out.sun_in_world[i], suns_in_world[i])
                    for i in range(n)]

@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from . import calibration, finish, frames as clip_frames, motion, native_loader, notes
 from .moving_view import SHADOWS_IN_VIEW, SHADOWS_OUT_OF_VIEW, MovingView, reference_camera
@@ -394,15 +395,31 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
     sun = {k: np.asarray(suns[k], float) for k in seen}
     step = float(np.median([_angle_deg(sun[j], sun[k]) for j, k in zip(seen, seen[1:])]))
     g = int(min(LOOP_GROUP_MAX, max(LOOP_GROUP, math.ceil(LOOP_MOTION_DEG / max(step, 1e-3)))))
+    # Every group's middle, per length and first position in `seen`, and
+    # each frame's scatter, computed once: the groups around neighbouring
+    # positions overlap (per position, they cost a long clip a second).
+    by_position = np.asarray([sun[k] for k in seen])
+    medians = {length: np.median(sliding_window_view(by_position, length, axis=0), axis=-1)
+               for length in {g // 2, g - g // 2, g}}
+    middles: Dict[Tuple[int, int], np.ndarray] = {}
 
-    def middle(ks: Sequence[int]) -> np.ndarray:
-        m = np.median([sun[k] for k in ks], axis=0)  # per component: strays do not move it
-        return m / np.linalg.norm(m)
+    def middle(first: int, length: int) -> np.ndarray:
+        """The Sun in the middle of `length` frames from position `first`
+        (per component: strays do not move it)."""
+        if (first, length) not in middles:
+            m = medians[length][first]
+            middles[first, length] = m / np.linalg.norm(m)
+        return middles[first, length]
 
-    def motion(ks: Sequence[int]) -> np.ndarray:
+    def motion(first: int) -> np.ndarray:
         """From the middle of a group's first half to its second's (a low
         Sun's scatter along its shadows is no motion)."""
-        return middle(ks[len(ks) // 2:]) - middle(ks[:len(ks) // 2])
+        return middle(first + g // 2, g - g // 2) - middle(first, g // 2)
+    # Low Suns' raw zeniths scatter by up to 10 deg along their long
+    # shadows: going back must stand out of the frames' own scatter (each
+    # frame off the middle of its neighbours: steady motion is no scatter).
+    scatter_at = [0.0] + [_angle_deg(sun[k], sun[j] + sun[m])
+                          for j, k, m in zip(seen, seen[1:], seen[2:])]
     first_of, first = [], 0  # per position in `seen`: where its segment starts
     for i, k in enumerate(seen):
         if i > 0 and any(starts[j] for j in range(seen[i - 1] + 1, k + 1)):
@@ -410,22 +427,16 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
         first_of.append(first)
     back = {}
     for i in range(g, len(seen) - g + 1):
-        before, after = seen[i - g:i], seen[i:i + g]
-        if any(starts[j] for j in range(before[0] + 1, after[-1] + 1)):
+        if any(starts[j] for j in range(seen[i - g] + 1, seen[i + g - 1] + 1)):
             continue
-        mb, ma = motion(before), motion(after)
+        mb, ma = motion(i - g), motion(i)
         if float(np.dot(mb, ma)) <= 0.5 * float(np.linalg.norm(mb) * np.linalg.norm(ma)):
             continue  # not one steady motion on both sides (or none)
         along = mb + ma
         along /= np.linalg.norm(along)
-        there = middle(after)
-        behind = -math.degrees(float(np.dot(there - middle(before), along)))
-        # Low Suns' raw zeniths scatter by up to 10 deg along their long
-        # shadows: going back must stand out of the frames' own scatter
-        # (each frame off the middle of its neighbours: steady motion is no
-        # scatter).
-        scatter = max(_angle_deg(sun[k], sun[j] + sun[m])
-                      for ks in (before, after) for j, k, m in zip(ks, ks[1:], ks[2:]))
+        there = middle(i, g)
+        behind = -math.degrees(float(np.dot(there - middle(i - g, g), along)))
+        scatter = max(scatter_at[i - g + 1:i - 1] + scatter_at[i + 1:i + g - 1])
         limit = max(LOOP_BACK_DEG, LOOP_SCATTER_TIMES * scatter)
         # ... back onto the path it travelled (a run of frames misled the
         # same way looks like a jump, but leads nowhere the Sun has been).
