@@ -12,6 +12,7 @@ Every function takes scalars or numpy arrays (vectors along the last axis).
 
 from __future__ import annotations
 
+import math
 from typing import Any, Tuple
 
 import numpy as np
@@ -88,6 +89,10 @@ def cross(u: Any, v: Any) -> np.ndarray:
 def angle_between_deg(u: Any, v: Any) -> float:
     """Angle between two 3-vectors of any non-zero length. atan2(|u x v|, u.v)
     stays exact for tiny angles, where acos of a dot of float32 vectors that
-    are not quite unit reads 0.01 deg between a vector and itself."""
-    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
-    return float(np.degrees(np.arctan2(np.linalg.norm(cross(u, v)), np.dot(u, v))))
+    are not quite unit reads 0.01 deg between a vector and itself. In plain
+    floats: it runs per frame, where numpy's per-call cost was most of it."""
+    ux, uy, uz = float(u[0]), float(u[1]), float(u[2])
+    vx, vy, vz = float(v[0]), float(v[1]), float(v[2])
+    across = math.sqrt((uy * vz - uz * vy) ** 2 + (uz * vx - ux * vz) ** 2
+                       + (ux * vy - uy * vx) ** 2)
+    return math.degrees(math.atan2(across, ux * vx + uy * vy + uz * vz))

@@ -298,16 +298,6 @@ def _path_from(solved) -> _Path:
                  path_margin=list(solved.path_margin))
 
 
-def _angle_deg(a, b) -> float:
-    """Angle between two 3-vectors (deg); plain floats, as it runs per frame
-    (numpy's per-call overhead was most of the check's time)."""
-    ax, ay, az = (float(v) for v in a)
-    bx, by, bz = (float(v) for v in b)
-    cross = math.sqrt((ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2
-                      + (ax * by - ay * bx) ** 2)
-    return math.degrees(math.atan2(cross, ax * bx + ay * by + az * bz))
-
-
 def working_factor(width: int) -> int:
     """The power of two a frame `width` wide is divided by to be at most
     WORKING_MAX_WIDTH wide (halvings are the cheap area averages)."""
@@ -371,7 +361,7 @@ def _evidence_support(first: _Path, again: _Path,
         d1, d2 = first.direction[k], again.direction[k]
         if d1 < 0 or d2 < 0:
             out.append(margin)
-        elif _angle_deg(directions[d1], directions[d2]) <= 1.5 * spacing_deg:
+        elif angles.angle_between_deg(directions[d1], directions[d2]) <= 1.5 * spacing_deg:
             out.append(min(margin, first.path_margin[k]))
         else:
             out.append(min(margin, FOLLOWED_CONFIDENCE * FULL_CONFIDENCE_MARGIN))
@@ -393,7 +383,8 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
     if len(seen) < 2 * LOOP_GROUP:
         return []
     sun = {k: np.asarray(suns[k], float) for k in seen}
-    step = float(np.median([_angle_deg(sun[j], sun[k]) for j, k in zip(seen, seen[1:])]))
+    step = float(np.median([angles.angle_between_deg(sun[j], sun[k])
+                            for j, k in zip(seen, seen[1:])]))
     g = int(min(LOOP_GROUP_MAX, max(LOOP_GROUP, math.ceil(LOOP_MOTION_DEG / max(step, 1e-3)))))
     # Every group's middle, per length and first position in `seen`, and
     # each frame's scatter, computed once: the groups around neighbouring
@@ -418,7 +409,7 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
     # Low Suns' raw zeniths scatter by up to 10 deg along their long
     # shadows: going back must stand out of the frames' own scatter (each
     # frame off the middle of its neighbours: steady motion is no scatter).
-    scatter_at = [0.0] + [_angle_deg(sun[k], sun[j] + sun[m])
+    scatter_at = [0.0] + [angles.angle_between_deg(sun[k], sun[j] + sun[m])
                           for j, k, m in zip(seen, seen[1:], seen[2:])]
     first_of, first = [], 0  # per position in `seen`: where its segment starts
     for i, k in enumerate(seen):
@@ -440,7 +431,7 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
         limit = max(LOOP_BACK_DEG, LOOP_SCATTER_TIMES * scatter)
         # ... back onto the path it travelled (a run of frames misled the
         # same way looks like a jump, but leads nowhere the Sun has been).
-        if behind > limit and any(_angle_deg(sun[k], there) <= limit
+        if behind > limit and any(angles.angle_between_deg(sun[k], there) <= limit
                                   for k in seen[first_of[i - g]:i - g]):
             back[i] = behind
     return [seen[i] for i in sorted(back)
@@ -959,7 +950,7 @@ class _WholeClip:
                 r.sunlight = Sunlight.NO
                 self.unlit(r, "the Sun is below the horizon here")
             elif r.sunlight == Sunlight.YES and r.circle_in_world is not None and \
-                    _angle_deg(r.sun_in_world, r.circle_in_world) > (
+                    angles.angle_between_deg(r.sun_in_world, r.circle_in_world) > (
                         CIRCLE_DOUBT_DEG if hazy else OFF_CIRCLE_UNLIT_DEG):
                 r.sunlight = Sunlight.UNKNOWN
                 self.unlit(r, "the shadows on this frame are not where the Sun's path puts "
@@ -1009,7 +1000,7 @@ class _WholeClip:
             raw.refined, raw.tracked, raw.reason = True, refined, None
             if measured:
                 raw.confidence = refined.confidence * support
-                if _angle_deg(refined.sun_in_world, d) > AGREE_DEG:
+                if angles.angle_between_deg(refined.sun_in_world, d) > AGREE_DEG:
                     raw.confidence *= 0.5
             else:
                 raw.confidence = refined.confidence * (
@@ -1027,7 +1018,7 @@ class _WholeClip:
         refined = self.done.track(k)
         if refined is None:
             return None
-        off = _angle_deg(refined.sun_in_world, d)
+        off = angles.angle_between_deg(refined.sun_in_world, d)
         if not self.path.measured[k] and not beyond:
             return refined if off <= limit or self.between(k, refined.sun_in_world) else None
         return refined if off <= (AGREE_DEG if self.path.measured[k] else limit) else None
@@ -1046,7 +1037,7 @@ class _WholeClip:
                 self.tracker.track_toward(gray, d)
             self.tracking_s += r.seconds
             self.tracker_last = k
-            if r.ok and _angle_deg(r.sun_in_world, d) <= limit:
+            if r.ok and angles.angle_between_deg(r.sun_in_world, d) <= limit:
                 return r
         return None
 
@@ -1071,7 +1062,8 @@ class _WholeClip:
         tracker's own Sun is checked against the measured frames instead."""
         for j in (self.before[k], self.after[k]):
             d = self.directions[self.path.direction[j]]
-            if _angle_deg(sun_in_world, d) > self.refine_max_deg + self.motion_deg(k, j):
+            if angles.angle_between_deg(sun_in_world, d) > \
+                    self.refine_max_deg + self.motion_deg(k, j):
                 return False
         return True
 
@@ -1156,7 +1148,7 @@ def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_
         r.on_circle = r.confidence
         if r.sun_in_world is None:
             continue
-        off = _angle_deg(r.sun_in_world, r.circle_in_world)
+        off = angles.angle_between_deg(r.sun_in_world, r.circle_in_world)
         if off > OFF_CIRCLE_UNLIT_DEG and by_pinned and _height_unpinned(r) and \
                 _azimuth_apart_deg(r.sun_in_world, r.circle_in_world) <= CIRCLE_DOUBT_DEG:
             # Its shadows point where the circle's Sun puts them and cannot
