@@ -16,8 +16,9 @@ capture time, see core/frametimes.py; default: the panel's Frame Times),
 
 On failure: one line "sunlapse: error: <reason>" on stderr and a non-zero
 code (2 a bad flag or file named on the command line, 3 the scene or clip
-lacks something, 4 an internal error: a bug of ours, 130 interrupted by
-Ctrl-C). Outputs are written only when the whole run succeeds, each
+lacks something, 4 an internal error: a bug of ours, or an incomplete
+install (no native core; examples/run_estimate.py: no numpy), 130
+interrupted by Ctrl-C). Outputs are written only when the whole run succeeds, each
 atomically (a temporary file in the same folder, renamed): the track file
 last, after --apply-lamp, --render-ar and --save. An output may not be an
 input (the .blend, the clip, the times file). A failed or interrupted run

@@ -71,7 +71,8 @@ Flags:
 Clip, camera and model come from the .blend (active clip, scene camera) unless
 given. On failure it prints one line "sunlapse: error: <reason>" on stderr and
 exits non-zero (2 a bad flag or file, 3 the scene or clip lacks something, 4 an
-internal error, 130 interrupted); the track file is written only when the run
+internal error or an incomplete install: no native core, or a Blender Python
+without numpy; 130 interrupted); the track file is written only when the run
 succeeds. The work is done by the add-on (addon/cli.py), which Blender 4.2+
 also offers as `blender -c sunlapse SCENE.blend --out ...`.
 """
@@ -96,8 +97,24 @@ def load_sunlapse():
     return module
 
 
+def check_python():
+    """One line and exit 4 (as a missing native core) when this Blender's
+    Python lacks numpy, which every Blender ships: Debian's Blender takes
+    its Python from the first python3.11 on PATH, so a pyenv, conda or
+    virtualenv Python there hides the system's packages."""
+    try:
+        import numpy  # noqa: F401
+    except ImportError as e:
+        print(f"sunlapse: error: this Blender's Python ({sys.prefix}) cannot import numpy "
+              f"({e}). If another Python comes first on PATH (pyenv, conda, a virtualenv), "
+              "Debian's Blender runs on it: start Blender with /usr/bin first on PATH.",
+              file=sys.stderr)
+        sys.exit(4)
+
+
 if __name__ == "__main__":
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    check_python()
     load_sunlapse()
     from sunlapse import cli
     sys.exit(cli.main(argv))

@@ -121,6 +121,23 @@ def test_scripted_run_fails_with_one_line_reason(empty_scene, tmp_path, missing,
     assert not os.path.exists(out)
 
 
+def test_a_blender_python_without_numpy_is_a_one_line_error(empty_scene, tmp_path):
+    """Debian's Blender run from a shell whose PATH starts with another
+    Python (pyenv, conda) cannot import numpy: it was a traceback from the
+    add-on's import. numpy is hidden here as that Python hides it."""
+    blend = make_blend(tmp_path)
+    out = str(tmp_path / "out.sun.json")
+    cmd = [bpy.app.binary_path, "-b", "--factory-startup", blend, "--python-exit-code", "1",
+           "--python-expr", "import sys; sys.modules['numpy'] = None",
+           "--python", os.path.join(ROOT, "examples", "run_estimate.py"), "--", "--out", out]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 4, proc.stdout + proc.stderr
+    lines = error_lines(proc)
+    assert len(lines) == 1 and "cannot import numpy" in lines[0] and "PATH" in lines[0]
+    assert "Traceback" not in proc.stdout + proc.stderr
+    assert not os.path.exists(out)
+
+
 def test_a_camera_that_sees_no_model_is_a_one_line_user_error(empty_scene, tmp_path):
     """It was "internal error: ValueError ..." with a traceback (exit 4)."""
     blend = make_blend(tmp_path, camera=False)
