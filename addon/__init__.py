@@ -17,25 +17,40 @@ bl_info = {
 
 if "bpy" in locals():  # script reload (F3 › Reload Scripts)
     import importlib
-    for _m in (properties, operators, panels, overlay):  # noqa: F821
+    for _m in _modules:  # noqa: F821
         importlib.reload(_m)
 
 import bpy  # noqa: E402
 
-from . import operators, overlay, panels, properties  # noqa: E402
+from . import broken  # noqa: E402
 
-_modules = (properties, operators, panels, overlay)
+# Why the add-on cannot work in this Blender ("" when it can): a Python
+# without numpy registers broken.py's notice instead of a traceback.
+BROKEN = ""
+try:
+    from . import operators, overlay, panels, properties  # noqa: E402
+    _modules: tuple = (properties, operators, panels, overlay)
+except ImportError as e:
+    if e.name != "numpy":
+        raise
+    BROKEN = broken.numpy_missing(e)
+    _modules = ()
 _cli_handle = None
 
 
 def register():
     global _cli_handle
+    if BROKEN:
+        broken.register(BROKEN)
     for m in _modules:
         m.register()
     # Blender 4.2+: `blender -c sunlapse SCENE.blend --out TRACK.json ...`
     if bpy.app.version >= (4, 2, 0) and hasattr(bpy.utils, "register_cli_command"):
-        from . import cli
-        _cli_handle = bpy.utils.register_cli_command("sunlapse", cli.command)
+        if BROKEN:
+            _cli_handle = bpy.utils.register_cli_command("sunlapse", broken.command)
+        else:
+            from . import cli
+            _cli_handle = bpy.utils.register_cli_command("sunlapse", cli.command)
 
 
 def unregister():
@@ -45,3 +60,5 @@ def unregister():
         _cli_handle = None
     for m in reversed(_modules):
         m.unregister()
+    if BROKEN:
+        broken.unregister()

@@ -97,24 +97,11 @@ def load_sunlapse():
     return module
 
 
-def check_python():
-    """One line and exit 4 (as a missing native core) when this Blender's
-    Python lacks numpy, which every Blender ships: Debian's Blender takes
-    its Python from the first python3.11 on PATH, so a pyenv, conda or
-    virtualenv Python there hides the system's packages."""
-    try:
-        import numpy  # noqa: F401
-    except ImportError as e:
-        print(f"sunlapse: error: this Blender's Python ({sys.prefix}) cannot import numpy "
-              f"({e}). If another Python comes first on PATH (pyenv, conda, a virtualenv), "
-              "Debian's Blender runs on it: start Blender with /usr/bin first on PATH.",
-              file=sys.stderr)
-        sys.exit(4)
-
-
 if __name__ == "__main__":
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    check_python()
-    load_sunlapse()
+    sunlapse = load_sunlapse()
+    if sunlapse.BROKEN:  # a Blender Python that cannot run the add-on (no numpy)
+        print(f"sunlapse: error: {sunlapse.BROKEN}", file=sys.stderr)
+        sys.exit(4)
     from sunlapse import cli
     sys.exit(cli.main(argv))

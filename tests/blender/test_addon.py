@@ -138,6 +138,33 @@ def test_a_blender_python_without_numpy_is_a_one_line_error(empty_scene, tmp_pat
     assert not os.path.exists(out)
 
 
+def test_a_blender_python_without_numpy_registers_a_notice_not_a_traceback(tmp_path):
+    """The add-on enabled in such a Blender: the Sun tab says why (and
+    where the Python came from), registering and unregistering raise
+    nothing."""
+    check = "\n".join([
+        "import importlib.util, sys, bpy",
+        f"addon = {os.path.join(ROOT, 'addon')!r}",
+        "spec = importlib.util.spec_from_file_location('sunlapse', addon + '/__init__.py',",
+        "                                              submodule_search_locations=[addon])",
+        "m = importlib.util.module_from_spec(spec); sys.modules['sunlapse'] = m",
+        "spec.loader.exec_module(m)",
+        "m.register()",
+        "print('REASON', m.BROKEN)",
+        "t = bpy.types",
+        "print('PANELS', hasattr(t, 'CLIP_PT_sunlapse_broken'),",
+        "      hasattr(t, 'VIEW3D_PT_sunlapse_broken'), hasattr(t, 'CLIP_PT_sunlapse'))",
+        "m.unregister()",
+        "print('GONE', hasattr(bpy.types, 'CLIP_PT_sunlapse_broken'))"])
+    cmd = [bpy.app.binary_path, "-b", "--factory-startup", "--python-exit-code", "1",
+           "--python-expr", "import sys; sys.modules['numpy'] = None", "--python-expr", check]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0 and "Traceback" not in out, out
+    assert "REASON this Blender's Python" in out and "cannot import numpy" in out, out
+    assert "PANELS True True False" in out and "GONE False" in out, out
+
+
 def test_a_camera_that_sees_no_model_is_a_one_line_user_error(empty_scene, tmp_path):
     """It was "internal error: ValueError ..." with a traceback (exit 4)."""
     blend = make_blend(tmp_path, camera=False)

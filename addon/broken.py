@@ -1,0 +1,55 @@
+"""What the add-on registers when it cannot load: its Python lacks numpy,
+which every Blender ships. Debian's Blender runs on the first python3.11 on
+PATH, so a pyenv, conda or virtualenv Python there hides the system's
+packages. Then the sidebar's Sun tab says why and the command line prints
+one line and exits 4, never a traceback (bpy only: nothing here imports
+numpy)."""
+
+import sys
+import textwrap
+
+import bpy
+
+# Exit code of an incomplete install (examples/run_estimate.py, cli.py).
+EXIT_BROKEN = 4
+reason = ""
+
+
+def numpy_missing(error: ImportError) -> str:
+    return (f"this Blender's Python ({sys.prefix}) cannot import numpy ({error}). If "
+            "another Python comes first on PATH (pyenv, conda, a virtualenv), Debian's "
+            "Blender runs on it: start Blender with /usr/bin first on PATH.")
+
+
+def _draw(self, context):
+    box = self.layout.box()
+    box.alert = True
+    box.label(text="sunlapse cannot load", icon="ERROR")
+    for part in textwrap.wrap(reason, 60):
+        box.label(text=part)
+
+
+def command(argv):
+    """Blender 4.2+ `blender -c sunlapse ...` when the add-on cannot load."""
+    sys.stderr.write(f"sunlapse: error: {reason}\n")
+    return EXIT_BROKEN
+
+
+_classes = tuple(
+    type(f"{prefix}_PT_sunlapse_broken", (bpy.types.Panel,), {
+        "bl_idname": f"{prefix}_PT_sunlapse_broken", "bl_space_type": space,
+        "bl_region_type": "UI", "bl_category": "Sun", "bl_label": "sunlapse",
+        "draw": _draw})
+    for space, prefix in (("CLIP_EDITOR", "CLIP"), ("VIEW_3D", "VIEW3D")))
+
+
+def register(why: str) -> None:
+    global reason
+    reason = why
+    for c in _classes:
+        bpy.utils.register_class(c)
+
+
+def unregister() -> None:
+    for c in reversed(_classes):
+        bpy.utils.unregister_class(c)
