@@ -13,6 +13,8 @@
 # In each, the saved file is opened again (tools/check_saved_scene.py): the
 # lamp must match the track on every frame, and the AR setup (compositor
 # included) must render a frame. The tracks must match the source tree's.
+# In (b) and (c), with numpy hidden, `blender -c sunlapse` must print one
+# error line and exit 4.
 # (d) The window tests (tests/ui, Xvfb) run in sid's Blender 5.x too.
 #   bash tools/test-packages.sh        (ends "test-packages: PASS" or exits 1)
 set -euo pipefail
@@ -122,6 +124,21 @@ import sunlapse_native._native as n; print('native:', n.__file__)
     "$out/blender-$version.sun.json" "$out/ar-$version" >"$out/blender-$version-check.log" 2>&1 \
     || { tail -15 "$out/blender-$version-check.log"; return 1; }
   grep "^check" "$out/blender-$version-check.log" | sed 's/^/  /'
+  # A Blender Python that cannot import numpy (hidden on PYTHONPATH here, as
+  # a pyenv or conda Python first on PATH hides it from Debian's Blender):
+  # `blender -c sunlapse` says so in one line and exits 4, no traceback.
+  local fake="$out/no-numpy" log="$out/blender-$version-no-numpy.log" code=0
+  mkdir -p "$fake/numpy" && rm -f "$out/no-numpy.sun.json"
+  echo 'raise ModuleNotFoundError("No module named numpy (hidden by test-packages)", name="numpy")' \
+    >"$fake/numpy/__init__.py"
+  PYTHONPATH="$fake" bx --python-use-system-env -b -c sunlapse "$scene/scene.blend" \
+    --out "$out/no-numpy.sun.json" >"$log" 2>&1 || code=$?
+  if [ "$code" != 4 ] || ! grep -q "^sunlapse: error: .*cannot import numpy" "$log" \
+      || grep -q Traceback "$log" || [ -e "$out/no-numpy.sun.json" ]; then
+    echo "  without numpy: expected one error line and exit 4, got exit $code:"
+    tail -15 "$log"; return 1
+  fi
+  echo "  without numpy: one error line, exit 4"
 }
 
 echo "== (b) Blender 4.3 / Python 3.13 from trixie: the extension"
