@@ -10,9 +10,10 @@ import textwrap
 
 import bpy
 
-# Exit code of an incomplete install (examples/run_estimate.py, cli.py).
+# Exit code of an incomplete install: cli.EXIT_INTERNAL, as a missing
+# native core (cli.py is not imported here: this module imports bpy alone).
 EXIT_BROKEN = 4
-reason = ""
+reason = ""  # set by register(), or by examples/run_estimate.py
 
 
 def numpy_missing(error: ImportError) -> str:
@@ -30,7 +31,8 @@ def _draw(self, context):
 
 
 def command(argv):
-    """Blender 4.2+ `blender -c sunlapse ...` when the add-on cannot load."""
+    """`blender -c sunlapse ...` (Blender 4.2+) and examples/run_estimate.py
+    when the add-on cannot load: the reason in one line."""
     sys.stderr.write(f"sunlapse: error: {reason}\n")
     return EXIT_BROKEN
 

@@ -101,7 +101,7 @@ if __name__ == "__main__":
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     sunlapse = load_sunlapse()
     if sunlapse.BROKEN:  # a Blender Python that cannot run the add-on (no numpy)
-        print(f"sunlapse: error: {sunlapse.BROKEN}", file=sys.stderr)
-        sys.exit(4)
+        sunlapse.broken.reason = sunlapse.BROKEN
+        sys.exit(sunlapse.broken.command(argv))
     from sunlapse import cli
     sys.exit(cli.main(argv))
