@@ -2,16 +2,17 @@
 which every Blender ships. Debian's Blender runs on the first python3.11 on
 PATH, so a pyenv, conda or virtualenv Python there hides the system's
 packages. Then the sidebar's Sun tab says why and the command line prints
-one line and exits 4, never a traceback (bpy only: nothing here imports
-numpy)."""
+one line and exits 4, never a traceback (bpy and the glue's text helper:
+nothing here imports numpy)."""
 
 import sys
-import textwrap
 
 import bpy
 
+from .blender.text import wrapped
+
 # Exit code of an incomplete install: cli.EXIT_INTERNAL, as a missing
-# native core (cli.py is not imported here: this module imports bpy alone).
+# native core (cli.py is not imported here: it needs more than bpy).
 EXIT_BROKEN = 4
 reason = ""  # set by register(), or by examples/run_estimate.py
 
@@ -26,8 +27,8 @@ def _draw(self, context):
     box = self.layout.box()
     box.alert = True
     box.label(text="sunlapse cannot load", icon="ERROR")
-    for part in textwrap.wrap(reason, 60):
-        box.label(text=part)
+    # All of it: the Read All button's operator is not registered here.
+    wrapped(box, context, reason, max_lines=40)
 
 
 def command(argv):
