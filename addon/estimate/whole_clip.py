@@ -202,6 +202,14 @@ LOOP_GROUP_MAX = 12
 LOOP_MOTION_DEG = 1.0
 LOOP_BACK_DEG = 2.0
 LOOP_SCATTER_TIMES = 3.0
+# A clip played backward from some frame (a boomerang edit) turns the Sun
+# back over the path it came along, which the Sun never does; the segment's
+# circle, clocked by frame numbers, cannot turn (the speed benchmark's
+# ping-pong clip: 4-14 deg off around each turn). Four groups of frames
+# around the turn, each spanning REVERSAL_MOTION_DEG of the path (at least
+# LOOP_GROUP frames, at most REVERSAL_GROUP_MAX).
+REVERSAL_MOTION_DEG = 3.0
+REVERSAL_GROUP_MAX = 30
 # A frame whose Sun is this far off its segment's circle shows shadows that
 # are not the Sun's where the path puts it (an engraved line, a dark
 # object): it is not counted as in sunlight (UNKNOWN) and gets the path.
@@ -368,50 +376,75 @@ def _evidence_support(first: _Path, again: _Path,
     return out
 
 
-def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> List[int]:
-    """Positions where the clip goes back along the Sun's path (a loop, a
-    cut to earlier footage). Around each position, a group of frames before
-    and one from there, each spanning about LOOP_MOTION_DEG of the Sun's
-    path: where the Sun moves the same way through both, the middle Sun of
-    the group from there lies behind the middle Sun of the group before, by
-    more than LOOP_BACK_DEG and LOOP_SCATTER_TIMES the frames' scatter, and
-    as near as that to a Sun of the path already travelled; of neighbouring
-    positions, the one going back furthest. suns: per frame the Sun in
-    sunlight (None: none); starts: segments already known. Not confidence:
-    a loop the path could not follow leaves its frames doubted."""
-    seen = [k for k, s in enumerate(suns) if s is not None]
-    if len(seen) < 2 * LOOP_GROUP:
-        return []
-    sun = {k: np.asarray(suns[k], float) for k in seen}
-    step = float(np.median([angles.angle_between_deg(sun[j], sun[k])
-                            for j, k in zip(seen, seen[1:])]))
-    g = int(min(LOOP_GROUP_MAX, max(LOOP_GROUP, math.ceil(LOOP_MOTION_DEG / max(step, 1e-3)))))
-    # Every group's middle, per length and first position in `seen`, and
-    # each frame's scatter, computed once: the groups around neighbouring
-    # positions overlap (computed again at every position, they took 0.2 s
-    # of a 1,000-frame run).
-    by_position = np.asarray([sun[k] for k in seen])
-    medians = {length: np.median(sliding_window_view(by_position, length, axis=0), axis=-1)
-               for length in {g // 2, g - g // 2, g}}
-    middles: Dict[Tuple[int, int], np.ndarray] = {}
+class _SunRun:
+    """The frames with a Sun, in order, and what the tests of the clip going
+    back read from them: the Sun's median step, the middle Sun of a group of
+    frames and each frame's scatter. suns: per frame the Sun (None: none)."""
 
-    def middle(first: int, length: int) -> np.ndarray:
+    def __init__(self, suns: Sequence[Optional[np.ndarray]]):
+        self.seen = [k for k, s in enumerate(suns) if s is not None]
+        self.by_position = by_position = np.asarray(
+            [np.asarray(suns[k], float) for k in self.seen]).reshape(-1, 3)
+        self.step = float(np.median([angles.angle_between_deg(a, b)
+                                     for a, b in zip(by_position, by_position[1:])])) \
+            if len(self.seen) > 1 else 0.0
+        # Every group's middle, per length and first position in `seen`,
+        # computed once: the groups around neighbouring positions overlap
+        # (computed again at every position, they took 0.2 s of a
+        # 1,000-frame run).
+        self.medians: Dict[int, np.ndarray] = {}
+        self.middles: Dict[Tuple[int, int], np.ndarray] = {}
+        # Low Suns' raw zeniths scatter by up to 10 deg along their long
+        # shadows: going back must stand out of the frames' own scatter (each
+        # frame off the middle of its neighbours: steady motion is no scatter).
+        self.scatter_at = [0.0] + [
+            angles.angle_between_deg(b, a + c)
+            for a, b, c in zip(by_position, by_position[1:], by_position[2:])]
+
+    def middle(self, first: int, length: int) -> np.ndarray:
         """The Sun in the middle of `length` frames from position `first`
         (per component: strays do not move it)."""
-        if (first, length) not in middles:
-            m = medians[length][first]
-            middles[first, length] = m / np.linalg.norm(m)
-        return middles[first, length]
+        if (first, length) not in self.middles:
+            if length not in self.medians:
+                self.medians[length] = np.median(
+                    sliding_window_view(self.by_position, length, axis=0), axis=-1)
+            m = self.medians[length][first]
+            self.middles[first, length] = m / np.linalg.norm(m)
+        return self.middles[first, length]
+
+    def crosses_start(self, first: int, last: int, starts: Sequence[int]) -> bool:
+        """Whether a segment starts after position `first`, up to `last`."""
+        return any(starts[j] for j in range(self.seen[first] + 1, self.seen[last] + 1))
+
+
+def _group(step: float, motion_deg: float, most: int) -> int:
+    """Frames in a group spanning motion_deg of a path moving `step` deg a
+    frame (at least LOOP_GROUP, at most `most`)."""
+    return int(min(most, max(LOOP_GROUP, math.ceil(motion_deg / max(step, 1e-3)))))
+
+
+def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> List[int]:
+    """Positions where the clip goes back along the Sun's path (a loop, a
+    cut to earlier footage), or turns back over it (_turning_back). Around
+    each position, a group of frames before and one from there, each
+    spanning about LOOP_MOTION_DEG of the Sun's path: where the Sun moves
+    the same way through both, the middle Sun of the group from there lies
+    behind the middle Sun of the group before, by more than LOOP_BACK_DEG
+    and LOOP_SCATTER_TIMES the frames' scatter, and as near as that to a
+    Sun of the path already travelled; of neighbouring positions, the one
+    going back furthest. suns: per frame the Sun in sunlight (None: none);
+    starts: segments already known. Not confidence: a loop the path could
+    not follow leaves its frames doubted."""
+    run = _SunRun(suns)
+    seen, middle, scatter_at = run.seen, run.middle, run.scatter_at
+    if len(seen) < 2 * LOOP_GROUP:
+        return []
+    g = _group(run.step, LOOP_MOTION_DEG, LOOP_GROUP_MAX)
 
     def motion(first: int) -> np.ndarray:
         """From the middle of a group's first half to its second's (a low
         Sun's scatter along its shadows is no motion)."""
         return middle(first + g // 2, g - g // 2) - middle(first, g // 2)
-    # Low Suns' raw zeniths scatter by up to 10 deg along their long
-    # shadows: going back must stand out of the frames' own scatter (each
-    # frame off the middle of its neighbours: steady motion is no scatter).
-    scatter_at = [0.0] + [angles.angle_between_deg(sun[k], sun[j] + sun[m])
-                          for j, k, m in zip(seen, seen[1:], seen[2:])]
     first_of, first = [], 0  # per position in `seen`: where its segment starts
     for i, k in enumerate(seen):
         if i > 0 and any(starts[j] for j in range(seen[i - 1] + 1, k + 1)):
@@ -419,7 +452,7 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
         first_of.append(first)
     back = {}
     for i in range(g, len(seen) - g + 1):
-        if any(starts[j] for j in range(seen[i - g] + 1, seen[i + g - 1] + 1)):
+        if run.crosses_start(i - g, i + g - 1, starts):
             continue
         mb, ma = motion(i - g), motion(i)
         if float(np.dot(mb, ma)) <= 0.5 * float(np.linalg.norm(mb) * np.linalg.norm(ma)):
@@ -432,11 +465,45 @@ def _going_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> 
         limit = max(LOOP_BACK_DEG, LOOP_SCATTER_TIMES * scatter)
         # ... back onto the path it travelled (a run of frames misled the
         # same way looks like a jump, but leads nowhere the Sun has been).
-        if behind > limit and any(angles.angle_between_deg(sun[k], there) <= limit
-                                  for k in seen[first_of[i - g]:i - g]):
+        if behind > limit and any(angles.angle_between_deg(s, there) <= limit
+                                  for s in run.by_position[first_of[i - g]:i - g]):
             back[i] = behind
-    return [seen[i] for i in sorted(back)
-            if back[i] >= max(back.get(i - 1, 0.0), back.get(i + 1, 0.0))]
+    cuts = {seen[i] for i in back if back[i] >= max(back.get(i - 1, 0.0), back.get(i + 1, 0.0))}
+    return sorted(cuts | set(_turns_in(run, starts)))
+
+
+def _turning_back(suns: Sequence[Optional[np.ndarray]], starts: Sequence[int]) -> List[int]:
+    """Frames where the clip turns back over the Sun's path (_turns_in).
+    suns: per frame the Sun (None: none); starts: segments already known."""
+    return _turns_in(_SunRun(suns), starts)
+
+
+def _turns_in(run: _SunRun, starts: Sequence[int]) -> List[int]:
+    """Frames where the clip turns back over the Sun's path (played backward
+    from there, REVERSAL_*): the Sun moves one way through the two groups of
+    frames before and the other way through the two from there, by more
+    than LOOP_BACK_DEG and LOOP_SCATTER_TIMES the frames' scatter, and the
+    last group comes back to the first. Of neighbouring positions, the one
+    whose sides mirror each other best."""
+    seen, middle = run.seen, run.middle
+    h = _group(run.step, REVERSAL_MOTION_DEG, REVERSAL_GROUP_MAX)
+    mirror = {}
+    for i in range(2 * h, len(seen) - 2 * h + 1):
+        if run.crosses_start(i - 2 * h, i + 2 * h - 1, starts):
+            continue
+        p1, p2, q1, q2 = (middle(i + k * h, h) for k in (-2, -1, 0, 1))
+        before, after = p2 - p1, q2 - q1
+        if float(np.dot(before, after)) >= \
+                -0.5 * float(np.linalg.norm(before) * np.linalg.norm(after)):
+            continue
+        scatter = max(run.scatter_at[i - 2 * h + 1:i + 2 * h - 1])
+        limit = max(LOOP_BACK_DEG, LOOP_SCATTER_TIMES * scatter)
+        moved = min(angles.angle_between_deg(p1, p2), angles.angle_between_deg(q1, q2))
+        apart = angles.angle_between_deg(p1, q2) + angles.angle_between_deg(p2, q1)
+        if moved > limit and apart <= limit:
+            mirror[i] = apart
+    return [seen[i] for i in sorted(mirror)
+            if mirror[i] <= min(mirror.get(i - 1, math.inf), mirror.get(i + 1, math.inf))]
 
 
 def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
@@ -599,6 +666,8 @@ class _WholeClip:
         if kept is None:
             return self.result
         self.clip_pass(kept)
+        if self.times_s is None:
+            self.turns_before_the_path()
         if not self.path_and_check():
             return self.result
         # Frames whose evidence steered the path but that show no direct
@@ -627,6 +696,21 @@ class _WholeClip:
             self.view.shadows_in_their_frames(self.result.frames)
         self.result.timing = self.timing()
         return self.result
+
+    def turns_before_the_path(self) -> None:
+        """Without times, where the clip turns back over the Sun's path
+        (_turning_back) a segment starts: found on the pass's own tracked
+        Suns, before the path is chosen. Found after it, by _going_back,
+        the path and its check run twice (1.8 s more on the speed
+        benchmark's 300-frame 1080p ping-pong clip)."""
+        suns = []
+        for k in range(self.n):
+            tracked = self.done.track(k)
+            sunlit = tracked is not None and tracked.ok and \
+                _contrast(tracked) >= SUNLIT_MIN_CONTRAST
+            suns.append(tracked.sun_in_world if sunlit else None)
+        for k in _turning_back(suns, self.starts):
+            self.starts[k] = 1
 
     def path_and_check(self) -> bool:
         """The path chosen, its segments checked and each frame's sunlight

@@ -517,6 +517,29 @@ def test_a_loop_whose_sun_goes_back_less_than_a_step_is_split(world):
                trimmed_circle.fit_trimmed).jumps == []
 
 
+def test_a_clip_played_forward_and_back_is_split_where_it_turns(world):
+    """A clip played forward then backward (a boomerang edit) with no times:
+    the Sun never turns back along its path, so a segment's circle, fitted
+    with the frame as its clock, cannot follow the turn. One segment, its
+    frames near the turns were taken for shadows that are not the Sun's and
+    predicted 4-14 deg off (the speed benchmark's ping-pong clip). Where the
+    Sun turns back over the path it came along, a segment starts."""
+    n = 20
+    forward = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(n)]
+    truth = forward + forward[::-1] + forward
+    result = run(world, [draw(world, d, k) for k, d in enumerate(truth)], None,
+                 trimmed_circle.fit_trimmed)
+    assert [len(s) for s in result.segments] == [n] * 3, result.segments
+    zs, azs = smooth(result)
+    for k in range(3 * n):
+        assert error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), truth[k]) < 1.0, k
+    # A Sun that only slows down and goes on is no turn.
+    slowing = [sun(50 - 0.3 * k * (1.0 - k / (4.0 * n)), 120 + 0.4 * k * (1.0 - k / (4.0 * n)))
+               for k in range(2 * n)]
+    assert run(world, [draw(world, d, k) for k, d in enumerate(slowing)], None,
+               trimmed_circle.fit_trimmed).jumps == []
+
+
 def test_the_clock_puts_night_frames_in_the_dark_unless_it_contradicts_the_footage(world):
     """With capture times and a place, a frame the ephemeris puts below the
     horizon has no direct sunlight even when it shows hard shadows (street
