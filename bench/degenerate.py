@@ -6,6 +6,9 @@ and run as a user runs them (issue 25's list):
 - loop: the scene's first LOOP_FRAMES frames played LOOP_TIMES times, no
   times (the Sun goes back 8 deg at each loop: a step the untimed path
   allows); scored on segments found and the error against the truth;
+- pingpong: the scene's frames played forward, backward and forward again
+  (a boomerang edit), no times; scored on segments found (target 3) and
+  the error against the truth;
 - same_time / date_only: a times file giving every frame the same time, or
   the date alone; scored against the run without times (as accurate);
 - corrupt: frame CORRUPT_FRAME replaced by noise; scored on frames more
@@ -57,12 +60,14 @@ def estimate(blend, out, *flags):
     return (trackfile.read_track(out) if proc.returncode == 0 else None), text
 
 
-def errors(track, truth, period=None):
+def errors(track, truth, period=None, source=None):
     """Per frame (error deg or None, confidence) against the truth (its
-    frames repeated every `period` frames)."""
+    frames repeated every `period` frames, or the truth's position of each
+    frame: source(frame))."""
     out = []
     for e in track.frames:
-        t = truth.frames[(e.frame - 1) % (period or len(truth.frames))]
+        t = truth.frames[source(e.frame) if source is not None else
+                         (e.frame - 1) % (period or len(truth.frames))]
         if not e.has_estimate:
             out.append((None, e.confidence))
             continue
@@ -129,6 +134,24 @@ def main(argv=None):
         segments = track.extra.get("segments", [])
         print(f"loop ({LOOP_FRAMES} frames x {LOOP_TIMES}): {len(segments)} segments "
               f"(target {LOOP_TIMES}); {figures(errors(track, truth, LOOP_FRAMES))}")
+
+    # Forward, backward and forward again, no times.
+    ffmpeg("-i", clip, "-vf", "reverse", "-an", out("reversed.mp4"))
+    with open(out("pingpong.txt"), "w") as f:
+        f.writelines(f"file '{c}'\n" for c in (clip, out("reversed.mp4"), clip))
+    ffmpeg("-f", "concat", "-safe", "0", "-i", out("pingpong.txt"), "-c:v", "libx264",
+           "-crf", "18", "-pix_fmt", "yuv420p", out("pingpong.mp4"))
+    blend_with_clip(scene_blend, out("pingpong.mp4"), 3 * n, out("pingpong.blend"))
+    track, _ = estimate(out("pingpong.blend"), out("pingpong.sun.json"))
+
+    def back(f):  # the truth's position of frame f
+        return f - 1 if f <= n else 2 * n - f if f <= 2 * n else f - 2 * n - 1
+    if track is None:
+        print("pingpong: the run failed")
+    else:
+        segments = track.extra.get("segments", [])
+        print(f"pingpong ({n} frames forward, back, forward): {len(segments)} segments "
+              f"(target 3); {figures(errors(track, truth, source=back))}")
 
     # Times without information, against no times.
     plain, _ = estimate(scene_blend, out("plain.sun.json"))
