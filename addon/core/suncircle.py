@@ -55,16 +55,23 @@ def _unit(zenith_deg, azimuth_deg) -> np.ndarray:
 
 
 def _basis(pole_zenith, pole_azimuth):
-    p = _unit(math.degrees(pole_zenith), math.degrees(pole_azimuth))
+    """The pole p and the circle's plane's axes e1, e2. In plain floats: the
+    fits call it thousands of times a run, where numpy's per-call cost was
+    most of it."""
+    sz, cz = math.sin(pole_zenith), math.cos(pole_zenith)
+    sa, ca = math.sin(pole_azimuth), math.cos(pole_azimuth)
+    p = np.array([sz * sa, sz * ca, cz])
     # e1: the pole's meridian toward the zenith side (hour angle 0 = noon,
     # the Sun's highest point); e2 = p x e1 points east, so the angle from
-    # e1 toward e2 is minus the (westward) hour angle.
-    up = np.array([0.0, 0.0, 1.0])
-    e1 = up - (up @ p) * p
-    norm = np.linalg.norm(e1)
-    e1 = e1 / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
-    e2 = angles.cross(p, e1)
-    return p, e1, e2
+    # e1 toward e2 is minus the (westward) hour angle. up - (up.p) p is
+    # sin(pz) (-cz sa, -cz ca, sz): e1 is that unit vector times the sign of
+    # sin(pz), and e2 (ca, -sa, 0) times it.
+    if abs(sz) <= 1e-9:
+        e1 = np.array([1.0, 0.0, 0.0])
+        return p, e1, angles.cross(p, e1)
+    sign = 1.0 if sz > 0 else -1.0
+    return p, np.array([-sign * cz * sa, -sign * cz * ca, abs(sz)]), \
+        np.array([sign * ca, -sign * sa, 0.0])
 
 
 def _model(params, t, rate, bases=None):
@@ -83,6 +90,38 @@ def _model(params, t, rate, bases=None):
     h = h0 + r * t
     return (math.cos(dec) * (np.cos(h)[:, None] * e1 + np.sin(h)[:, None] * e2)
             + math.sin(dec) * p[None, :])
+
+
+def _jacobian(params, t, rate, root_w):
+    """The model's derivatives by each parameter, weighted (root_w per
+    Sun), as the residuals are laid out; None where the pole is at the
+    zenith (the basis jumps there: the caller differentiates numerically).
+    Analytic: the forward differences cost five evaluations of the model
+    an iteration, most of a fit's time."""
+    pz, pa, dec, h0 = (float(v) for v in params[:4])
+    r = float(params[4]) if rate is None else rate
+    sz, cz = math.sin(pz), math.cos(pz)
+    if abs(sz) <= 1e-9:
+        return None
+    sa, ca = math.sin(pa), math.cos(pa)
+    sign = 1.0 if sz > 0 else -1.0
+    p, e1, e2 = _basis(pz, pa)
+    h = h0 + r * t
+    ch, sh = np.cos(h)[:, None], np.sin(h)[:, None]
+    cd, sd = math.cos(dec), math.sin(dec)
+    along = ch * e1 + sh * e2                 # the circle's unit radius toward the Sun
+    ahead = cd * (ch * e2 - sh * e1)          # d/dh of the Sun
+    # d e1/d pz = sign p, d e2/d pz = 0, d p/d pz = -sign e1;
+    # d e1/d pa = sign (-cz ca, cz sa, 0), d e2/d pa = sign (-sa, -ca, 0),
+    # d p/d pa = sz (ca, -sa, 0).
+    d_pz = cd * sign * ch * p[None, :] - sd * sign * e1[None, :]
+    d_pa = (cd * sign * (ch * np.array([-cz * ca, cz * sa, 0.0])
+                         + sh * np.array([-sa, -ca, 0.0]))
+            + sd * sz * np.array([ca, -sa, 0.0])[None, :])
+    columns = [d_pz, d_pa, -sd * along + cd * p[None, :], ahead]
+    if rate is None:
+        columns.append(ahead * t[:, None])
+    return np.stack([(c * root_w[:, None]).ravel() for c in columns], axis=1)
 
 
 def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
@@ -139,6 +178,17 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
     def residuals(pr):
         return ((_model(pr, tw, rate, bases) - s) * np.sqrt(ww * robust)[:, None]).ravel()
 
+    def jacobian(pr, r0):
+        analytic = _jacobian(pr, tw, rate, np.sqrt(ww * robust))
+        if analytic is not None:
+            return analytic
+        numeric = np.empty((len(r0), len(pr)))
+        for k in range(len(pr)):
+            d = np.zeros(len(pr))
+            d[k] = 1e-6
+            numeric[:, k] = (residuals(pr + d) - r0) / 1e-6
+        return numeric
+
     # The residuals and the Jacobian at the current parameters, kept while
     # they hold: an accepted step's residuals are the next iteration's, and
     # a rejected step leaves both as they were (most of a fit's cost).
@@ -148,11 +198,7 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
         if r0 is None:
             r0 = residuals(params)
         if jac is None:
-            jac = np.empty((len(r0), len(params)))
-            for k in range(len(params)):
-                d = np.zeros(len(params))
-                d[k] = 1e-6
-                jac[:, k] = (residuals(params + d) - r0) / 1e-6
+            jac = jacobian(params, r0)
         jtj, jtr = jac.T @ jac, jac.T @ r0
         step = np.linalg.lstsq(jtj + lam * np.diag(np.diag(jtj) + 1e-9), -jtr, rcond=None)[0]
         trial = params + step

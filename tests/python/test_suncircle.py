@@ -54,3 +54,25 @@ def test_too_few_or_simultaneous_frames_are_refused():
     assert not suncircle.fit_circle([1, 2, 3], [30, 31, 32], [100, 101, 102]).success
     fit = suncircle.fit_circle([5.0] * 6, [30] * 6, [100] * 6)
     assert not fit.success and "same time" in fit.message
+
+
+@pytest.mark.parametrize("rate", [None, -math.radians(15.0)])
+def test_the_analytic_jacobian_is_the_models_derivative(rate):
+    """The fit's Jacobian (analytic, in place of five evaluations of the
+    model an iteration) against central differences of the model, poles on
+    both sides of the zenith (the basis flips with the sign of sin(pz))
+    and at the zenith, where the fit falls back to differences."""
+    rng = np.random.default_rng(3)
+    t = rng.uniform(-5.0, 5.0, 25)
+    root_w = np.sqrt(rng.uniform(0.1, 1.0, 25))
+    for pz in (0.3, 1.2, -0.4, -2.0, 2.9):
+        params = np.array([pz, rng.uniform(-4, 4), rng.uniform(-0.4, 0.4), rng.uniform(-2, 2)]
+                          + ([rng.uniform(-0.3, 0.3)] if rate is None else []))
+        jac = suncircle._jacobian(params, t, rate, root_w)
+
+        def model(q):
+            return (suncircle._model(q, t, rate) * root_w[:, None]).ravel()
+        numeric = np.stack([(model(params + 1e-7 * e) - model(params - 1e-7 * e)) / 2e-7
+                            for e in np.eye(len(params))], axis=1)
+        assert np.abs(jac - numeric).max() < 1e-6, pz
+    assert suncircle._jacobian(np.array([0.0, 1.0, 0.2, 0.1]), t, -0.26, root_w) is None
