@@ -88,13 +88,26 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     if (prior[t].allFinite() && prior[t].norm() >= 0.5)
       prior_unit[t] = prior[t].normalized();
   }
+  // Within prior_tolerance_deg the prior costs nothing, and beyond the
+  // angle where it reaches prior_max_cost it costs that: only the ring
+  // between needs the angle (a margin of 1e-9 rad keeps both bounds on
+  // their side; the acos for every direction of every frame, three times,
+  // was a quarter of a solve with a prior).
+  const double cos_free = std::cos(o.prior_tolerance_deg * kDeg - 1e-9);
+  const double capped_deg =
+      o.prior_weight > 0
+          ? o.prior_tolerance_deg + std::sqrt(o.prior_max_cost / o.prior_weight)
+          : kInf;
+  const double cos_capped =
+      capped_deg < 180.0 ? std::cos(capped_deg * kDeg + 1e-9) : -2.0;
   auto cost_of = [&](int t, int d) {
     const double c = evidence_cost(t, d);
     if (prior_unit.empty() || prior_unit[t].isZero()) return c;
-    const double off =
-        std::acos(std::clamp(grid.direction(d).dot(prior_unit[t]), -1.0, 1.0)) /
-            kDeg -
-        o.prior_tolerance_deg;
+    const double cos_off = grid.direction(d).dot(prior_unit[t]);
+    if (cos_off >= cos_free) return c;
+    if (cos_off < cos_capped) return c + o.prior_max_cost;
+    const double off = std::acos(std::clamp(cos_off, -1.0, 1.0)) / kDeg -
+                       o.prior_tolerance_deg;
     return off <= 0
                ? c
                : c + std::min(o.prior_max_cost, o.prior_weight * off * off);
@@ -115,6 +128,27 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     return std::max(o.max_step_deg, slack);
   };
 
+  // The grid's cached neighbours (nearest first) out to the largest step
+  // the clip allows, in flat arrays: the recursion reads them for every
+  // direction of every frame, three times, and the per-direction lists of
+  // the grid cost more to walk than the steps themselves.
+  double widest = 0.0;
+  for (int t = 1; t < T; ++t) widest = std::max(widest, radius(t));
+  const bool flat = widest <= grid.cached_radius_deg();
+  std::vector<int64_t> near_first(flat ? D + 1 : 0, 0);
+  std::vector<int32_t> near_index;
+  std::vector<float> near_angle;
+  if (flat) {
+    for (int d = 0; d < D; ++d) {
+      for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
+        if (nb.angle_deg > widest) break;
+        near_index.push_back(nb.index);
+        near_angle.push_back(nb.angle_deg);
+      }
+      near_first[d + 1] = static_cast<int64_t>(near_index.size());
+    }
+  }
+
   // One step of the recursion between frame t-1 and frame t (symmetric, so
   // it serves both directions): out[d] = min over p of in[p] + the step's
   // cost, or a jump from the best of `in`, or no step at a segment start.
@@ -127,6 +161,40 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
     const int in_arg = static_cast<int>(best_in - in.begin());
     const double r = radius(t);
     const double step_per_deg2 = o.step_weight / (r * r);
+    // The cheapest step into d from its neighbours within r: the value
+    // alone in four running minima (exact: a minimum does not depend on the
+    // order), or with its origin, nearest first as the grid lists them.
+    auto best_step = [&](int d, int* arg) {
+      const int64_t k0 = near_first[d];
+      const int64_t k1 =
+          std::upper_bound(
+              near_angle.begin() + k0, near_angle.begin() + near_first[d + 1],
+              static_cast<float>(r), [r](float, float a) { return a > r; }) -
+          near_angle.begin();
+      const int32_t* idx = near_index.data();
+      const float* ang = near_angle.data();
+      auto step = [&](int64_t k) {
+        return in[idx[k]] + step_per_deg2 * ang[k] * ang[k];
+      };
+      double c = kInf;
+      if (arg != nullptr) {
+        for (int64_t k = k0; k < k1; ++k) {
+          const double s = step(k);
+          if (s < c) c = s, *arg = idx[k];
+        }
+        return c;
+      }
+      double c1 = kInf, c2 = kInf, c3 = kInf;
+      int64_t k = k0;
+      for (; k + 4 <= k1; k += 4) {
+        c = std::min(c, step(k));
+        c1 = std::min(c1, step(k + 1));
+        c2 = std::min(c2, step(k + 2));
+        c3 = std::min(c3, step(k + 3));
+      }
+      for (; k < k1; ++k) c = std::min(c, step(k));
+      return std::min(std::min(c, c1), std::min(c2, c3));
+    };
     // Directions are independent: in parallel (the solve is a few ms a
     // frame on long clips, after the pass, with nothing to overlap it).
     tbb::parallel_for(
@@ -139,14 +207,8 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
             if (hard) {
               c = in_min, arg = in_arg;
             } else {
-              if (r <= grid.cached_radius_deg()) {
-                for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
-                  if (nb.angle_deg > r) break;  // nearest first
-                  const double step = in[nb.index] + step_per_deg2 *
-                                                         nb.angle_deg *
-                                                         nb.angle_deg;
-                  if (step < c) c = step, arg = nb.index;
-                }
+              if (flat) {
+                c = best_step(d, back_row ? &arg : nullptr);
               } else {
                 for (int p : grid.Within(d, r)) {
                   const double ang =
