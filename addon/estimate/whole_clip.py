@@ -210,6 +210,20 @@ LOOP_SCATTER_TIMES = 3.0
 # LOOP_GROUP frames, at most REVERSAL_GROUP_MAX).
 REVERSAL_MOTION_DEG = 3.0
 REVERSAL_GROUP_MAX = 30
+# Without times a segment's circle is clocked by frame numbers, which holds
+# while the frames are evenly spaced in time. A time-lapse whose interval
+# changes (a day-to-night ramp, a speed-ramped edit) moves the Sun further
+# a frame in one part: the circle, fitted to the rest, took the frames of
+# that part for shadows that are not the Sun's and dropped their Suns (12
+# of 40 frames of test_whole_clip's interval change, the rest 0.1-0.4 deg
+# off). Where the thirds of a segment move at paces more than
+# PACE_CHANGE_RATIO apart, its clock follows the Sun's own pace: the Sun
+# crosses the sky at a constant angular speed, so the way it has come is
+# the time (_pace_clock). Paces measured over groups of frames spanning
+# PACE_MOTION_DEG of the path (at least LOOP_GROUP frames, at most
+# REVERSAL_GROUP_MAX).
+PACE_CHANGE_RATIO = 1.5
+PACE_MOTION_DEG = 3.0
 # A frame whose Sun is this far off its segment's circle shows shadows that
 # are not the Sun's where the path puts it (an engraved line, a dark
 # object): it is not counted as in sunlight (UNKNOWN) and gets the path.
@@ -324,7 +338,8 @@ def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
 def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                   directions: Sequence[Sequence[float]],
                   times_s: Optional[Sequence[float]], n: int,
-                  spacing_deg: float) -> Optional[np.ndarray]:
+                  spacing_deg: float,
+                  frame_clock: Optional[Sequence[float]] = None) -> Optional[np.ndarray]:
     """Per frame the Sun on its circle about the pole fitted (fit_circle:
     core/trimmed_circle.py's fit_trimmed) to the path's measured frames in
     the frame's segment ((n, 3), NaN rows where no fit holds), or None when the path
@@ -339,7 +354,8 @@ def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                 if path.measured[k] and path.direction[k] >= 0 else None for k in ks]
         if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
             continue
-        times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
+        times = [float(times_s[k]) if times_s is not None else
+                 float(k) if frame_clock is None else float(frame_clock[k]) for k in ks]
         fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None)
         if not fit.success or fit.residual_deg is None or \
                 fit.residual_deg > PRIOR_MAX_RESIDUAL_DEG:
@@ -506,6 +522,53 @@ def _turns_in(run: _SunRun, starts: Sequence[int]) -> List[int]:
             if mirror[i] <= min(mirror.get(i - 1, math.inf), mirror.get(i + 1, math.inf))]
 
 
+def _pace_clock(suns: Sequence[Optional[np.ndarray]], numbers: Sequence[int],
+                starts: Sequence[int]) -> Optional[List[float]]:
+    """Per frame the clock its segment's Sun circle is fitted on without
+    times: its frame number, or where the segment's pace changes
+    (PACE_CHANGE_RATIO), its frame number where the segment starts plus the
+    way the Sun has come since, in frames of the segment's median pace.
+    None when no segment's pace changes. suns: per frame the Sun (None:
+    none); numbers: the frame numbers; starts: the segments."""
+    n = len(numbers)
+    clock = [float(f) for f in numbers]
+    bounds = [0] + [k for k in range(1, n) if starts[k]] + [n]
+    changed = False
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        run = _SunRun(suns[lo:hi])
+        h = _group(run.step, PACE_MOTION_DEG, REVERSAL_GROUP_MAX)
+        if len(run.seen) < 6 * h:
+            continue
+        # The pace across each position: the way between the middle Suns of
+        # the groups before and from there, over the frames between their
+        # middles (deg a frame).
+        at, pace = [], []
+        for i in range(h, len(run.seen) - h + 1):
+            before = [numbers[lo + k] for k in run.seen[i - h:i]]
+            after = [numbers[lo + k] for k in run.seen[i:i + h]]
+            frames = float(np.mean(after) - np.mean(before))
+            if frames > 0:
+                at.append(float(numbers[lo + run.seen[i]]))
+                pace.append(angles.angle_between_deg(run.middle(i - h, h), run.middle(i, h))
+                            / frames)
+        thirds = [float(np.median(part)) for part in np.array_split(np.asarray(pace), 3)
+                  if len(part)]
+        if len(thirds) < 3 or max(thirds) <= PACE_CHANGE_RATIO * max(min(thirds), 1e-9):
+            continue
+        changed = True
+        # Each frame's pace (a running median over a group: a stray Sun
+        # does not jump it), then the way come, frame to frame.
+        width = min(h, len(pace))
+        steady = np.median(sliding_window_view(np.asarray(pace), width), axis=-1)
+        centres = np.median(sliding_window_view(np.asarray(at), width), axis=-1)
+        per_frame = np.interp(np.asarray(numbers[lo:hi], float), centres, steady)
+        typical = float(np.median(pace))
+        for k in range(lo + 1, hi):
+            step = 0.5 * (per_frame[k - lo - 1] + per_frame[k - lo]) / typical
+            clock[k] = clock[k - 1] + (numbers[k] - numbers[k - 1]) * step
+    return clock if changed else None
+
+
 def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
                            starts: Sequence[int]) -> List[int]:
     """Segment bounds (frame positions, first 0, last n) without the jumps
@@ -622,6 +685,9 @@ class _WholeClip:
         # Frames whose evidence the path does not use (found without direct
         # sunlight; run()).
         self.ignored: List[int] = []
+        # Without times: per frame the clock its circle is fitted on, None
+        # for the frame numbers (_pace_clock).
+        self.frame_clock: Optional[List[float]] = None
         self.t0 = time.perf_counter()
         self.clock: Dict[str, float] = {}   # step -> seconds since t0 at its end
         self.frames_read = 0
@@ -703,18 +769,25 @@ class _WholeClip:
         Suns, before the path is chosen. Found after it, by _going_back,
         the path and its check run twice (1.8 s more on the speed
         benchmark's 300-frame 1080p ping-pong clip)."""
+        for k in _turning_back(self.tracked_suns(), self.starts):
+            self.starts[k] = 1
+
+    def tracked_suns(self) -> List[Optional[np.ndarray]]:
+        """Per frame the pass's own tracked Sun where its shadows were
+        sharp (SUNLIT_MIN_CONTRAST), else None."""
         suns = []
         for k in range(self.n):
             tracked = self.done.track(k)
             sunlit = tracked is not None and tracked.ok and \
                 _contrast(tracked) >= SUNLIT_MIN_CONTRAST
             suns.append(tracked.sun_in_world if sunlit else None)
-        for k in _turning_back(suns, self.starts):
-            self.starts[k] = 1
+        return suns
 
     def path_and_check(self) -> bool:
         """The path chosen, its segments checked and each frame's sunlight
         decided; False when no path could be chosen."""
+        if self.times_s is None:
+            self.frame_clock = _pace_clock(self.tracked_suns(), self.frames, self.starts)
         if not self.solve_path():
             return False
         self.choose_again_under_circle_prior()
@@ -857,7 +930,8 @@ class _WholeClip:
         """Where the path strayed from its segments' Sun circles, the path
         chosen again with the circle as a prior (PRIOR_* above)."""
         prior = None if self.fit_circle is None else _circle_prior(
-            self.fit_circle, self.path, self.directions, self.times_s, self.n, self.spacing_deg)
+            self.fit_circle, self.path, self.directions, self.times_s, self.n, self.spacing_deg,
+            self.frame_clock)
         self.path_prior = prior is not None
         self.mark("prior")
         if prior is not None:
@@ -947,7 +1021,8 @@ class _WholeClip:
         for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
             at = {f: k for k, f in enumerate(self.frames[lo:hi], start=lo)}
             seg = sorted(self.result.frames[lo:hi], key=lambda r: r.frame)
-            t = [float(r.frame) if seconds is None else seconds[at[r.frame]] for r in seg]
+            t = [seconds[at[r.frame]] if seconds is not None else float(r.frame)
+                 if self.frame_clock is None else self.frame_clock[at[r.frame]] for r in seg]
             doubt_off_circle(seg, t, seconds is not None, self.fit_circle)
 
     def decide_sunlight(self) -> None:
