@@ -9,6 +9,9 @@ and run as a user runs them (issue 25's list):
 - pingpong: the scene's frames played forward, backward and forward again
   (a boomerang edit), no times; scored on segments found (target 3) and
   the error against the truth;
+- interval: the scene's first half frame by frame, then every other frame
+  (the interval doubles, as in a day-to-night ramp), no times; scored on
+  frames without a Sun and the error against the truth;
 - same_time / date_only: a times file giving every frame the same time, or
   the date alone; scored against the run without times (as accurate);
 - corrupt: frame CORRUPT_FRAME replaced by noise; scored on frames more
@@ -152,6 +155,23 @@ def main(argv=None):
         segments = track.extra.get("segments", [])
         print(f"pingpong ({n} frames forward, back, forward): {len(segments)} segments "
               f"(target 3); {figures(errors(track, truth, source=back))}")
+
+    # The interval doubles halfway, no times.
+    half = n // 2
+    ffmpeg("-i", clip, "-vf", f"select='lt(n\\,{half})+gte(n\\,{half})*not(mod(n\\,2))',"
+           "setpts=N/25/TB", "-an", "-c:v", "libx264", "-crf", "18", "-pix_fmt", "yuv420p",
+           out("interval.mp4"))
+    kept = half + (n - half + 1) // 2
+
+    def doubled(f):  # the truth's position of frame f
+        return f - 1 if f <= half else half + 2 * (f - 1 - half)
+    blend_with_clip(scene_blend, out("interval.mp4"), kept, out("interval.blend"))
+    track, _ = estimate(out("interval.blend"), out("interval.sun.json"))
+    if track is None:
+        print("interval: the run failed")
+    else:
+        print(f"interval ({half} frames, then every other frame): "
+              f"{figures(errors(track, truth, source=doubled))}")
 
     # Times without information, against no times.
     plain, _ = estimate(scene_blend, out("plain.sun.json"))

@@ -221,9 +221,16 @@ REVERSAL_GROUP_MAX = 30
 # crosses the sky at a constant angular speed, so the way it has come is
 # the time (_pace_clock). Paces measured over groups of frames spanning
 # PACE_MOTION_DEG of the path (at least LOOP_GROUP frames, at most
-# REVERSAL_GROUP_MAX).
+# REVERSAL_GROUP_MAX). Only where the frame numbers leave at least
+# PACE_SWITCH_FRAMES of a segment's Suns further off the circle than
+# OFF_CIRCLE_UNLIT_DEG, and the pace leaves at most half as many: low
+# Suns' heights drift along their shadows, which moves their pace as much
+# (tried on every segment whose thirds' paces differ, it took 8 of the 68
+# suite scenes off a clock that was right: 4 failed, 14 frames more than
+# 5 deg off at confidence >= 0.5).
 PACE_CHANGE_RATIO = 1.5
 PACE_MOTION_DEG = 3.0
+PACE_SWITCH_FRAMES = 3
 # A frame whose Sun is this far off its segment's circle shows shadows that
 # are not the Sun's where the path puts it (an engraved line, a dark
 # object): it is not counted as in sunlight (UNKNOWN) and gets the path.
@@ -339,13 +346,15 @@ def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                   directions: Sequence[Sequence[float]],
                   times_s: Optional[Sequence[float]], n: int,
                   spacing_deg: float,
-                  frame_clock: Optional[Sequence[float]] = None) -> Optional[np.ndarray]:
+                  paced: Callable[[], Sequence[float]] = list) -> Optional[np.ndarray]:
     """Per frame the Sun on its circle about the pole fitted (fit_circle:
     core/trimmed_circle.py's fit_trimmed) to the path's measured frames in
     the frame's segment ((n, 3), NaN rows where no fit holds), or None when the path
     keeps to the fitted circles (nothing to choose again). The grid's
     cells are the path's precision: the inlier limit never falls below a
-    grid step."""
+    grid step. paced: without times, the frames' clock where the Sun's
+    pace changes (_pace_clock; empty: none), asked for where the frame
+    numbers leave the path far off the circle (PACE_SWITCH_FRAMES)."""
     prior = np.full((n, 3), np.nan)
     strayed = False
     for lo, hi in _segments(path.jump_before, n):
@@ -354,9 +363,16 @@ def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                 if path.measured[k] and path.direction[k] >= 0 else None for k in ks]
         if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
             continue
-        times = [float(times_s[k]) if times_s is not None else
-                 float(k) if frame_clock is None else float(frame_clock[k]) for k in ks]
+        times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
         fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None)
+        far = sum(off is not None and off > OFF_CIRCLE_UNLIT_DEG for off in fit.off_deg) \
+            if fit.success else 0
+        if times_s is None and far >= PACE_SWITCH_FRAMES and paced():
+            other = fit_circle([float(paced()[k]) for k in ks], suns, spacing_deg,
+                               times_are_seconds=False)
+            if other.success and 2 * sum(off is not None and off > OFF_CIRCLE_UNLIT_DEG
+                                         for off in other.off_deg) <= far:
+                fit = other
         if not fit.success or fit.residual_deg is None or \
                 fit.residual_deg > PRIOR_MAX_RESIDUAL_DEG:
             continue
@@ -685,9 +701,9 @@ class _WholeClip:
         # Frames whose evidence the path does not use (found without direct
         # sunlight; run()).
         self.ignored: List[int] = []
-        # Without times: per frame the clock its circle is fitted on, None
-        # for the frame numbers (_pace_clock).
-        self.frame_clock: Optional[List[float]] = None
+        # Without times: the clock of segments whose pace changes (paced()).
+        self.paced_for: Optional[Tuple[int, ...]] = None
+        self.paced_clock: List[float] = []
         self.t0 = time.perf_counter()
         self.clock: Dict[str, float] = {}   # step -> seconds since t0 at its end
         self.frames_read = 0
@@ -772,6 +788,16 @@ class _WholeClip:
         for k in _turning_back(self.tracked_suns(), self.starts):
             self.starts[k] = 1
 
+    def paced(self) -> List[float]:
+        """Without times, per frame the clock where the Sun's pace changes
+        (_pace_clock on the pass's tracked Suns, for the segments as they
+        stand), else empty."""
+        key = tuple(self.starts)
+        if self.paced_for != key:
+            self.paced_for = key
+            self.paced_clock = _pace_clock(self.tracked_suns(), self.frames, self.starts) or []
+        return self.paced_clock
+
     def tracked_suns(self) -> List[Optional[np.ndarray]]:
         """Per frame the pass's own tracked Sun where its shadows were
         sharp (SUNLIT_MIN_CONTRAST), else None."""
@@ -786,8 +812,6 @@ class _WholeClip:
     def path_and_check(self) -> bool:
         """The path chosen, its segments checked and each frame's sunlight
         decided; False when no path could be chosen."""
-        if self.times_s is None:
-            self.frame_clock = _pace_clock(self.tracked_suns(), self.frames, self.starts)
         if not self.solve_path():
             return False
         self.choose_again_under_circle_prior()
@@ -931,7 +955,7 @@ class _WholeClip:
         chosen again with the circle as a prior (PRIOR_* above)."""
         prior = None if self.fit_circle is None else _circle_prior(
             self.fit_circle, self.path, self.directions, self.times_s, self.n, self.spacing_deg,
-            self.frame_clock)
+            self.paced)
         self.path_prior = prior is not None
         self.mark("prior")
         if prior is not None:
@@ -1021,9 +1045,21 @@ class _WholeClip:
         for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
             at = {f: k for k, f in enumerate(self.frames[lo:hi], start=lo)}
             seg = sorted(self.result.frames[lo:hi], key=lambda r: r.frame)
-            t = [seconds[at[r.frame]] if seconds is not None else float(r.frame)
-                 if self.frame_clock is None else self.frame_clock[at[r.frame]] for r in seg]
-            doubt_off_circle(seg, t, seconds is not None, self.fit_circle)
+            t = [seconds[at[r.frame]] if seconds is not None else float(r.frame) for r in seg]
+            circle = _segment_circle(seg, t, seconds is not None, self.fit_circle)
+            unlit = _unlit_by(seg, circle)
+            if seconds is None and unlit >= PACE_SWITCH_FRAMES:
+                # The frame numbers leave Suns far off the circle: the Sun's
+                # own pace, where it changes, and where it leaves at most
+                # half as many off.
+                paced = self.paced()
+                if paced:
+                    other = _segment_circle(seg, [paced[at[r.frame]] for r in seg], False,
+                                            self.fit_circle)
+                    if other is not None and 2 * _unlit_by(seg, other) <= unlit:
+                        circle = other
+            if circle is not None:
+                _doubt_by(seg, *circle)
 
     def decide_sunlight(self) -> None:
         """Direct sunlight per frame (SUNLIT_MIN_CONTRAST and
@@ -1291,6 +1327,15 @@ def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_
     each of its frames; a frame whose Sun is off it by more than
     CIRCLE_DOUBT_DEG keeps less confidence (on_circle), with the square of
     the ratio."""
+    circle = _segment_circle(segment, t, times_are_seconds, fit_circle)
+    if circle is not None:
+        _doubt_by(segment, *circle)
+
+
+def _segment_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_seconds: bool,
+                    fit_circle: Callable[..., Any]) -> Optional[Tuple[Any, bool]]:
+    """doubt_off_circle's fit and whether the pinned Suns alone made it;
+    None when it failed."""
     suns = [r.sun_in_world if r.sun_in_world is not None and r.confidence >= 0.3 else None
             for r in segment]
     # The frames whose shadows pin the Sun's height set the circle when
@@ -1301,8 +1346,22 @@ def doubt_off_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_
     fit = fit_circle(list(t), pinned if by_pinned else suns, CIRCLE_INLIER_FLOOR_DEG,
                      [max(r.confidence, 1e-3) for r in segment],
                      times_are_seconds=times_are_seconds)
-    if not fit.success:
-        return
+    return (fit, by_pinned) if fit.success else None
+
+
+def _unlit_by(segment: Sequence[RawFrame], circle: Optional[Tuple[Any, bool]]) -> int:
+    """How many of the segment's Suns the circle puts further off than
+    OFF_CIRCLE_UNLIT_DEG (sunlight_against_circle takes them for shadows
+    that are not the Sun's)."""
+    if circle is None:
+        return 0
+    return sum(r.sun_in_world is not None and angles.angle_between_deg(
+        r.sun_in_world, circle[0].sun_in_world[i]) > OFF_CIRCLE_UNLIT_DEG
+        for i, r in enumerate(segment))
+
+
+def _doubt_by(segment: Sequence[RawFrame], fit: Any, by_pinned: bool) -> None:
+    """doubt_off_circle's circle kept with each frame, and the doubt."""
     for i, r in enumerate(segment):
         r.circle_in_world = np.asarray(fit.sun_in_world[i], dtype=float)
         r.on_circle = r.confidence
