@@ -954,8 +954,7 @@ class _WholeClip:
         """Where the path strayed from its segments' Sun circles, the path
         chosen again with the circle as a prior (PRIOR_* above)."""
         prior = None if self.fit_circle is None else _circle_prior(
-            self.fit_circle, self.path, self.directions, self.times_s, self.n, self.spacing_deg,
-            self.paced)
+            self.fit_circle, self.path, self.directions, self.times_s, self.n, self.spacing_deg)
         self.path_prior = prior is not None
         self.mark("prior")
         if prior is not None:
