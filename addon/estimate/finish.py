@@ -88,14 +88,18 @@ def _physical(native, track, numbers, raws, options, north):
 
 def finish(native, track: trackfile.Track, raws: List[RawSun], options: EstimateOptions,
            times, progress, segments: Sequence[Sequence[int]], pixel_scale: float = 1.0,
-           circle: Optional[Dict[int, Tuple[float, float]]] = None) -> None:
+           circle: Optional[Dict[int, Tuple[float, float]]] = None,
+           paced: Optional[Dict[int, float]] = None) -> None:
     """Smooths the raw Suns (per segment: smoothing never crosses a jump)
     and fills the track's frames. raws: in frame order; times: capture times
     of the run's frames in frame order, or None; pixel_scale: camera pixels
     per pixel of the native results (a tracker on reduced frames); circle:
     {index into raws: (zenith, geographic azimuth) of its segment's Sun
     circle} where one was fitted (the whole-clip estimate's): the two-pass
-    fit's prior path and the path past a segment's confident span."""
+    fit's prior path and the path past a segment's confident span; paced:
+    without times, {frame number: clock} of the segments whose circle
+    follows the Sun's pace (whole_clip._pace_clock): the two-pass fit runs
+    on that clock there, not on frame numbers."""
     check_progress(progress, 0.97)
     numbers = [r.frame for r in raws]
     north = track.north_offset_deg
@@ -113,7 +117,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
             track.north_offset_deg = north
     if smoothed is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
-        smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle)
+        smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle,
+                                    paced or {})
     # The whole clip's support is reported as a probability (calibration.py)
     # where the map was measured to hold: two-pass and physical smoothing
     # (ECE 0.074 and 0.081 on the suite). Online smoothing's causal angles
@@ -226,11 +231,11 @@ SPAN_MIN_CONFIDENCE = 0.1
 PREDICT_PAST_SPAN_SHARE = 0.5
 
 
-def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None):
+def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None, paced=None):
     """Smooths each segment on its own, only between its first and last
     frames with angles and confidence (SPAN_MIN_CONFIDENCE): nothing is
     extrapolated past them beyond the Sun's own motion, and no fit runs
-    through a time jump. circle: as finish's."""
+    through a time jump. circle, paced: as finish's."""
     index = {f: k for k, f in enumerate(numbers)}
     seconds = None if times is None else clock.seconds_since(times)
     zs, azs = [None] * len(numbers), [None] * len(numbers)
@@ -243,7 +248,8 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None)
         least = SPAN_MIN_CONFIDENCE if options.method == "default" else 0.0  # thesis: as it was
         span = [k for k in have if raws[k].confidence >= least] or have
         ks = [k for k in ks if span[0] <= k <= span[-1]]
-        x = [numbers[k] for k in ks] if seconds is None else [seconds[k] for k in ks]
+        x = [(paced or {}).get(numbers[k], numbers[k]) for k in ks] if seconds is None else \
+            [seconds[k] for k in ks]
         if mode == "two_pass" and options.method == "default":
             # The segment's Sun circle, where one was fitted, lends the fit
             # its shape where confident frames are far (two_pass_local_directions).

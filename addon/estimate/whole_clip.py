@@ -281,6 +281,9 @@ class WholeClipResult:
     frames: List[RawFrame] = field(default_factory=list)   # in the order given
     segments: List[List[int]] = field(default_factory=list)  # frame numbers per segment
     jumps: List[int] = field(default_factory=list)  # frames after an unexplained jump
+    # Without times, the clock of the frames whose segment's circle follows
+    # the Sun's pace (_pace_clock), by frame number: the smoothing's too.
+    paced: Dict[int, float] = field(default_factory=dict)
     anchor: Optional[int] = None   # the best-supported frame (for notes)
     # Camera pixels per pixel of the tracker's results (shadow ends).
     tracker_pixel_scale: float = 1.0
@@ -1057,6 +1060,7 @@ class _WholeClip:
                                             self.fit_circle)
                     if other is not None and 2 * _unlit_by(seg, other) <= unlit:
                         circle = other
+                        self.result.paced.update({r.frame: paced[at[r.frame]] for r in seg})
             if circle is not None:
                 _doubt_by(seg, *circle)
 
@@ -1535,7 +1539,7 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     if result.jumps:
         track.extra["jumps"] = result.jumps
     finish.finish(native, track, raws, options, times, progress, result.segments,
-                  result.tracker_pixel_scale, circle)
+                  result.tracker_pixel_scale, circle, result.paced)
     track.extra["timing"] = dict(result.timing, decode_wait_s=reads.wait_seconds(),
                                  total_s=time.perf_counter() - t0)
     return track

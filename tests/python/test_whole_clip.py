@@ -139,7 +139,7 @@ def smooth(result):
     raws = [raw_sun(r) for r in result.frames]
     opts = estimate_options.EstimateOptions()
     return finish._smooth_segments([r.frame for r in raws], raws, result.segments, "two_pass",
-                                   opts, None)
+                                   opts, None, paced=result.paced)
 
 
 def test_every_frame_within_a_degree_despite_a_gradient_and_broken_frames(world):
