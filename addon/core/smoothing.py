@@ -237,6 +237,62 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
     return z_out, a_out
 
 
+# Frames whose local fits are solved at once (_local_fits): their
+# neighbourhoods, padded to the widest, cost memory in proportion.
+LOCAL_FIT_CHUNK = 1024
+
+
+def _local_fits(t, order, lo, hi, windows, weights, values):
+    """Each frame's local polynomial fit (two_pass_local_directions) of
+    `values` ((n, 3)) over its neighbours order[lo[i]:hi[i]] (sorted by
+    time), weighted by the tricube kernel over windows[i] and `weights`, at
+    the frame itself: (n, 3), NaN rows where no neighbour has weight. A
+    quadratic where the frame has at least 6 weighted neighbours and 3 on
+    each side; at a segment's ends it would swing on the last few values,
+    so a line there (at least 3); never more terms than distinct times.
+    Solved from the kernel-weighted moments, all frames at once (a least
+    squares call per frame was most of the smoothing's time)."""
+    n = len(t)
+    out = np.full((n, 3), np.nan)
+    for first in range(0, n, LOCAL_FIT_CHUNK):
+        rows = np.arange(first, min(n, first + LOCAL_FIT_CHUNK))
+        width = int(np.max(hi[rows] - lo[rows]))
+        if width <= 0:
+            continue
+        slot = lo[rows][:, None] + np.arange(width)[None, :]
+        inside = slot < hi[rows][:, None]
+        near = order[np.where(inside, slot, 0)]
+        d = (t[near] - t[rows][:, None]) / windows[rows][:, None]
+        kern = np.where(inside, _tricube(np.where(inside, d, 0.0)) * weights[near], 0.0)
+        sel = kern > 0
+        m = sel.sum(axis=1)
+        # Distinct times among the weighted neighbours: sorted by time, a
+        # new one where the time differs from the last weighted one's.
+        last = np.maximum.accumulate(np.where(sel, d, -np.inf), axis=1)
+        before = np.concatenate([np.full((len(rows), 1), -np.inf), last[:, :-1]], axis=1)
+        distinct = (sel & (d > before)).sum(axis=1)
+        sides = np.minimum((sel & (d < 0)).sum(axis=1), (sel & (d > 0)).sum(axis=1))
+        degree = np.minimum(np.where((m >= 6) & (sides >= 3), 2, np.where(m >= 3, 1, 0)),
+                            distinct - 1)
+        dk = np.where(sel, d, 0.0)
+        powers = [kern * dk ** k for k in range(5)]
+        moments = np.stack([p.sum(axis=1) for p in powers], axis=1)
+        y = values[near]
+        sums = np.stack([np.einsum("ij,ijc->ic", powers[k], y) for k in range(3)], axis=1)
+        for deg in (0, 1, 2):
+            pick = np.flatnonzero((degree == deg) & (m > 0))
+            if len(pick):
+                terms = deg + 1
+                a = np.stack([moments[pick, i:i + terms] for i in range(terms)], axis=1)
+                b = sums[pick, :terms, :]
+                try:
+                    out[rows[pick]] = np.linalg.solve(a, b)[:, 0, :]
+                except np.linalg.LinAlgError:  # times a rounding apart: least squares
+                    out[rows[pick]] = [np.linalg.lstsq(ai, bi, rcond=None)[0][0]
+                                       for ai, bi in zip(a, b)]
+    return out
+
+
 def _tricube(d):
     """The local fits' tricube kernel at offsets d, in half windows (the
     callers take only the frames within the window, |d| < 1)."""
@@ -322,31 +378,15 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
                 h = min(widest, WINDOW_GROWTH * h)
             windows[i] = h
     robust = np.ones(n)
-    fitted = np.zeros((n, 3))
     lo = np.searchsorted(ts, t - windows, side="right")
     hi = np.searchsorted(ts, t + windows, side="left")
     for _ in range(iterations):
-        for i in range(n):
-            near = order[lo[i]:hi[i]]
-            d = (t[near] - t[i]) / windows[i]
-            kern = _tricube(d) * w[near] * robust[near]
-            sel = kern > 0
-            if not sel.any():  # no measured neighbour: the nearest measured frame
-                j = int(np.flatnonzero(good)[np.argmin(np.abs(t[good] - t[i]))])
-                fitted[i] = raw[j] - base[j] + base[i]
-                continue
-            m = int(sel.sum())
-            distinct = len(np.unique(d[sel]))
-            # A quadratic where the frame has measured neighbours on both
-            # sides; at a segment's ends it would swing on the last few
-            # values, so a line there.
-            sides = min(int(np.sum(sel & (d < 0))), int(np.sum(sel & (d > 0))))
-            degree = min(2 if (m >= 6 and sides >= 3) else (1 if m >= 3 else 0), distinct - 1)
-            x = np.vander(d[sel], degree + 1, increasing=True)
-            sw = np.sqrt(kern[sel])[:, None]
-            coef = np.linalg.lstsq(x * sw, (raw[near][sel] - base[near][sel]) * sw,
-                                   rcond=None)[0]
-            fitted[i] = base[i] + coef[0]  # the value at d = 0
+        fitted = _local_fits(t, order, lo, hi, windows, w * robust, raw - base)
+        # No measured neighbour: the nearest measured frame.
+        for i in np.flatnonzero(np.isnan(fitted[:, 0])):
+            j = int(np.flatnonzero(good)[np.argmin(np.abs(t[good] - t[i]))])
+            fitted[i] = raw[j] - base[j]
+        fitted += base
         fitted /= np.maximum(np.linalg.norm(fitted, axis=1, keepdims=True), 1e-12)
         cross = np.linalg.norm(np.cross(raw, fitted), axis=1)
         r = np.degrees(np.arctan2(cross, np.sum(raw * fitted, axis=1)))

@@ -115,3 +115,36 @@ def test_without_a_prior_the_window_does_not_widen_at_a_doubted_end():
     assert max(angle(zs[k], azs[k], *truth[k]) for k in range(len(t))) < 0.4
     wide = smoothing.two_pass_local_directions(t, raw_z, raw_a, conf, half_window=t[-1] - t[0])
     assert max(angle(wide[0][k], wide[1][k], *truth[k]) for k in range(len(t))) > 3.0
+
+
+def test_the_local_fits_at_once_are_each_frames_least_squares():
+    """_local_fits solves every frame's weighted local polynomial from its
+    moments at once: the same values as a least-squares fit per frame, with
+    the degree rule (a line at the ends, a constant on two frames, no more
+    terms than distinct times) and repeated times."""
+    rng = np.random.default_rng(4)
+    t = np.sort(np.concatenate([rng.uniform(0.0, 40.0, 60), [7.0, 7.0, 7.0]]))
+    values = np.stack([np.sin(t / 7.0), np.cos(t / 5.0), t / 40.0], axis=1) + \
+        rng.normal(0.0, 0.01, (len(t), 3))
+    weights = rng.uniform(0.0, 1.0, len(t)) * (rng.random(len(t)) < 0.9)
+    order = np.argsort(t, kind="stable")
+    windows = np.full(len(t), 4.0)
+    lo = np.searchsorted(t, t - windows, side="right")
+    hi = np.searchsorted(t, t + windows, side="left")
+    got = smoothing._local_fits(t, order, lo, hi, windows, weights, values)
+    for i in range(len(t)):
+        near = order[lo[i]:hi[i]]
+        d = (t[near] - t[i]) / windows[i]
+        kern = smoothing._tricube(d) * weights[near]
+        sel = kern > 0
+        if not sel.any():
+            assert np.isnan(got[i]).all()
+            continue
+        sides = min(int(np.sum(sel & (d < 0))), int(np.sum(sel & (d > 0))))
+        m = int(sel.sum())
+        degree = min(2 if (m >= 6 and sides >= 3) else (1 if m >= 3 else 0),
+                     len(np.unique(d[sel])) - 1)
+        x = np.vander(d[sel], degree + 1, increasing=True) * np.sqrt(kern[sel])[:, None]
+        want = np.linalg.lstsq(x, values[near][sel] * np.sqrt(kern[sel])[:, None],
+                               rcond=None)[0][0]
+        assert np.allclose(got[i], want, atol=1e-10), i
