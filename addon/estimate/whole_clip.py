@@ -572,8 +572,10 @@ def _pace_clock(suns: Sequence[Optional[np.ndarray]], numbers: Sequence[int],
                             / frames)
         thirds = [float(np.median(part)) for part in np.array_split(np.asarray(pace), 3)
                   if len(part)]
-        if len(thirds) < 3 or max(thirds) <= PACE_CHANGE_RATIO * max(min(thirds), 1e-9):
-            continue
+        typical = float(np.median(pace)) if pace else 0.0
+        if len(thirds) < 3 or typical <= 0.0 or \
+                max(thirds) <= PACE_CHANGE_RATIO * max(min(thirds), 1e-9):
+            continue  # steady, or a Sun that stands (the same picture again)
         changed = True
         # Each frame's pace (a running median over a group: a stray Sun
         # does not jump it), then the way come, frame to frame.
@@ -581,7 +583,6 @@ def _pace_clock(suns: Sequence[Optional[np.ndarray]], numbers: Sequence[int],
         steady = np.median(sliding_window_view(np.asarray(pace), width), axis=-1)
         centres = np.median(sliding_window_view(np.asarray(at), width), axis=-1)
         per_frame = np.interp(np.asarray(numbers[lo:hi], float), centres, steady)
-        typical = float(np.median(pace))
         for k in range(lo + 1, hi):
             step = 0.5 * (per_frame[k - lo - 1] + per_frame[k - lo]) / typical
             clock[k] = clock[k - 1] + (numbers[k] - numbers[k - 1]) * step

@@ -830,3 +830,12 @@ def test_a_rough_model_is_refined_by_the_clip_and_a_true_one_left_alone(world):
     print("rough model: as made", mean_error(as_made), "refined", mean_error(refined), r.message)
     assert r.status == native.ModelRefineStatus.REFINED, r.message
     assert mean_error(refined) < 0.5 * mean_error(as_made)
+
+
+def test_the_pace_clock_of_a_sun_that_stands_still_is_the_frame_numbers():
+    """Frames that repeat one picture (a frozen stretch of video) give no
+    pace to divide by: the clock stays the frame numbers, never infinite."""
+    n = 200
+    frozen = [sun(40.0, 150.0)] * 140 + [sun(40.0 - 0.5 * k, 150.0 + 0.8 * k) for k in range(60)]
+    clock = whole_clip._pace_clock(frozen, list(range(1, n + 1)), [0] * n)
+    assert clock is None or all(math.isfinite(c) for c in clock)
