@@ -122,39 +122,36 @@ def main(argv=None):
     def out(name):
         return os.path.join(work, name)
 
+    def played(name, parts, frames):
+        """The clips in `parts` one after the other, as H.264, estimated."""
+        with open(out(f"{name}.txt"), "w") as f:
+            f.writelines(f"file '{c}'\n" for c in parts)
+        ffmpeg("-f", "concat", "-safe", "0", "-i", out(f"{name}.txt"), "-c:v", "libx264",
+               "-crf", "18", "-pix_fmt", "yuv420p", out(f"{name}.mp4"))
+        blend_with_clip(scene_blend, out(f"{name}.mp4"), frames, out(f"{name}.blend"))
+        return estimate(out(f"{name}.blend"), out(f"{name}.sun.json"))[0]
+
+    def said_segments(label, track, target, **truth_at):
+        if track is None:
+            print(f"{label}: the run failed")
+        else:
+            print(f"{label}: {len(track.extra.get('segments', []))} segments (target {target}); "
+                  f"{figures(errors(track, truth, **truth_at))}")
+
     # Loop: the first frames played again and again, no times.
     ffmpeg("-i", clip, "-vf", f"select='lt(n\\,{LOOP_FRAMES})',setpts=N/25/TB", "-an",
            out("slice.mp4"))
-    with open(out("loop.txt"), "w") as f:
-        f.writelines(f"file '{out('slice.mp4')}'\n" for _ in range(LOOP_TIMES))
-    ffmpeg("-f", "concat", "-safe", "0", "-i", out("loop.txt"), "-c:v", "libx264", "-crf", "18",
-           "-pix_fmt", "yuv420p", out("loop.mp4"))
-    blend_with_clip(scene_blend, out("loop.mp4"), LOOP_FRAMES * LOOP_TIMES, out("loop.blend"))
-    track, _ = estimate(out("loop.blend"), out("loop.sun.json"))
-    if track is None:
-        print("loop: the run failed")
-    else:
-        segments = track.extra.get("segments", [])
-        print(f"loop ({LOOP_FRAMES} frames x {LOOP_TIMES}): {len(segments)} segments "
-              f"(target {LOOP_TIMES}); {figures(errors(track, truth, LOOP_FRAMES))}")
+    said_segments(f"loop ({LOOP_FRAMES} frames x {LOOP_TIMES})",
+                  played("loop", [out("slice.mp4")] * LOOP_TIMES, LOOP_FRAMES * LOOP_TIMES),
+                  LOOP_TIMES, period=LOOP_FRAMES)
 
     # Forward, backward and forward again, no times.
     ffmpeg("-i", clip, "-vf", "reverse", "-an", out("reversed.mp4"))
-    with open(out("pingpong.txt"), "w") as f:
-        f.writelines(f"file '{c}'\n" for c in (clip, out("reversed.mp4"), clip))
-    ffmpeg("-f", "concat", "-safe", "0", "-i", out("pingpong.txt"), "-c:v", "libx264",
-           "-crf", "18", "-pix_fmt", "yuv420p", out("pingpong.mp4"))
-    blend_with_clip(scene_blend, out("pingpong.mp4"), 3 * n, out("pingpong.blend"))
-    track, _ = estimate(out("pingpong.blend"), out("pingpong.sun.json"))
 
     def back(f):  # the truth's position of frame f
         return f - 1 if f <= n else 2 * n - f if f <= 2 * n else f - 2 * n - 1
-    if track is None:
-        print("pingpong: the run failed")
-    else:
-        segments = track.extra.get("segments", [])
-        print(f"pingpong ({n} frames forward, back, forward): {len(segments)} segments "
-              f"(target 3); {figures(errors(track, truth, source=back))}")
+    said_segments(f"pingpong ({n} frames forward, back, forward)",
+                  played("pingpong", [clip, out("reversed.mp4"), clip], 3 * n), 3, source=back)
 
     # The interval doubles halfway, no times.
     half = n // 2

@@ -98,7 +98,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     circle} where one was fitted (the whole-clip estimate's): the two-pass
     fit's prior path and the path past a segment's confident span; paced:
     without times, {frame number: clock} of the segments whose circle
-    follows the Sun's pace (whole_clip._pace_clock): the two-pass fit runs
+    follows the Sun's pace (untimed.pace_clock): the two-pass fit runs
     on that clock there, not on frame numbers."""
     check_progress(progress, 0.97)
     numbers = [r.frame for r in raws]

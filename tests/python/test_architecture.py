@@ -150,8 +150,10 @@ NOT_COPIES = {
     "core.trimmed_circle.MIN_INLIER_SHARE": "a share of Suns, not the tracker's contrast",
     "estimate.whole_clip.SEGMENT_MIN_MARGIN": "a jumped-to segment's lead in log-likelihood, "
                                               "not the frames a stream reads near a key frame",
-    "estimate.whole_clip.LOOP_GROUP_MAX": "frames in a loop check's group, not the path's "
-                                          "largest step in degrees",
+    "estimate.untimed.LOOP_GROUP_MAX": "frames in a loop check's group, not the path's "
+                                       "largest step in degrees",
+    "estimate.whole_clip.PACE_SWITCH_FRAMES": "Suns far off a circle, not the frames a "
+                                              "stream queues",
 }
 
 

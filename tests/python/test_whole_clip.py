@@ -27,7 +27,7 @@ from sunlapse.core import trimmed_circle  # noqa: E402
 from sunlapse.estimate import calibration, finish, options as estimate_options  # noqa: E402
 from sunlapse.estimate.raw import RawSun  # noqa: E402
 from sunlapse.core import angles  # noqa: E402
-from sunlapse.estimate import moving_view as moving, whole_clip  # noqa: E402
+from sunlapse.estimate import moving_view as moving, untimed, whole_clip  # noqa: E402
 
 W, H = 320, 200
 
@@ -571,9 +571,9 @@ def test_the_pace_clock_is_the_frame_numbers_while_the_pace_holds():
     steady = [s + rng.normal(0, 0.002, 3) for s in on_circle([k / 15.0 for k in range(n)])]
     steady[30] = sun(20.0, 200.0)
     numbers = list(range(1, n + 1))
-    assert whole_clip._pace_clock(steady, numbers, [0] * n) is None
+    assert untimed.pace_clock(steady, numbers, [0] * n) is None
     doubled = on_circle([(k if k < 30 else 30 + 2 * (k - 30)) / 15.0 for k in range(n)])
-    clock = whole_clip._pace_clock(doubled, numbers, [0] * n)
+    clock = untimed.pace_clock(doubled, numbers, [0] * n)
     assert clock is not None and clock[0] == 1.0
     steps = np.diff(clock)
     assert np.median(steps[5:20]) == pytest.approx(0.5 * np.median(steps[40:55]), rel=0.05)
@@ -837,5 +837,5 @@ def test_the_pace_clock_of_a_sun_that_stands_still_is_the_frame_numbers():
     pace to divide by: the clock stays the frame numbers, never infinite."""
     n = 200
     frozen = [sun(40.0, 150.0)] * 140 + [sun(40.0 - 0.5 * k, 150.0 + 0.8 * k) for k in range(60)]
-    clock = whole_clip._pace_clock(frozen, list(range(1, n + 1)), [0] * n)
+    clock = untimed.pace_clock(frozen, list(range(1, n + 1)), [0] * n)
     assert clock is None or all(math.isfinite(c) for c in clock)
