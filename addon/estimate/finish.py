@@ -118,7 +118,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     if smoothed is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle,
-                                    paced or {})
+                                    paced)
     # The whole clip's support is reported as a probability (calibration.py)
     # where the map was measured to hold: two-pass and physical smoothing
     # (ECE 0.074 and 0.081 on the suite). Online smoothing's causal angles
@@ -237,6 +237,7 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None,
     extrapolated past them beyond the Sun's own motion, and no fit runs
     through a time jump. circle, paced: as finish's."""
     index = {f: k for k, f in enumerate(numbers)}
+    paced = paced or {}
     seconds = None if times is None else clock.seconds_since(times)
     zs, azs = [None] * len(numbers), [None] * len(numbers)
     for seg in segments:
@@ -248,7 +249,7 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None,
         least = SPAN_MIN_CONFIDENCE if options.method == "default" else 0.0  # thesis: as it was
         span = [k for k in have if raws[k].confidence >= least] or have
         ks = [k for k in ks if span[0] <= k <= span[-1]]
-        x = [(paced or {}).get(numbers[k], numbers[k]) for k in ks] if seconds is None else \
+        x = [paced.get(numbers[k], numbers[k]) for k in ks] if seconds is None else \
             [seconds[k] for k in ks]
         if mode == "two_pass" and options.method == "default":
             # The segment's Sun circle, where one was fitted, lends the fit

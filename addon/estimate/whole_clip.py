@@ -482,9 +482,6 @@ class _WholeClip:
         # Frames whose evidence the path does not use (found without direct
         # sunlight; run()).
         self.ignored: List[int] = []
-        # Without times: the clock of segments whose pace changes (paced()).
-        self.paced_for: Optional[Tuple[int, ...]] = None
-        self.paced_clock: List[float] = []
         self.t0 = time.perf_counter()
         self.clock: Dict[str, float] = {}   # step -> seconds since t0 at its end
         self.frames_read = 0
@@ -568,17 +565,6 @@ class _WholeClip:
         benchmark's 300-frame 1080p ping-pong clip)."""
         for k in untimed.turning_back(self.tracked_suns(), self.starts):
             self.starts[k] = 1
-
-    def paced(self) -> List[float]:
-        """Without times, per frame the clock where the Sun's pace changes
-        (untimed.pace_clock on the pass's tracked Suns, for the segments as they
-        stand), else empty."""
-        key = tuple(self.starts)
-        if self.paced_for != key:
-            self.paced_for = key
-            self.paced_clock = untimed.pace_clock(self.tracked_suns(), self.frames,
-                                                  self.starts) or []
-        return self.paced_clock
 
     def tracked_suns(self) -> List[Optional[np.ndarray]]:
         """Per frame the pass's own tracked Sun where its shadows were
@@ -823,6 +809,7 @@ class _WholeClip:
         if self.fit_circle is None:
             return
         seconds = self.times_s
+        paced: Optional[List[float]] = None  # the pace clock, made when first asked
         for lo, hi in zip(self.bounds[:-1], self.bounds[1:]):
             at = {f: k for k, f in enumerate(self.frames[lo:hi], start=lo)}
             seg = sorted(self.result.frames[lo:hi], key=lambda r: r.frame)
@@ -833,7 +820,9 @@ class _WholeClip:
                 # The frame numbers leave Suns far off the circle: the Sun's
                 # own pace, where it changes, and where it leaves at most
                 # half as many off.
-                paced = self.paced()
+                if paced is None:
+                    paced = untimed.pace_clock(self.tracked_suns(), self.frames,
+                                               self.starts) or []
                 if paced:
                     other = _segment_circle(seg, [paced[at[r.frame]] for r in seg], False,
                                             self.fit_circle)
