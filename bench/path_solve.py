@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Times native.solve_sun_path on a long synthetic clip, as the whole-clip
-estimate calls it: untimed, untimed with a circle prior, and with times.
+estimate calls it: untimed, untimed with a circle prior, with times, and
+with times and a night halfway (one step beyond the grid's neighbour cache).
 
   /usr/bin/python3 bench/path_solve.py [--frames 1000] [--runs 3] [--out RESULTS.pkl]
 
@@ -60,7 +61,9 @@ def main(argv=None):
     options, starts = native.SunPathOptions(), [0] * args.frames
     cases = {"untimed": ([], starts, options),
              "untimed, circle prior": ([], starts, options, [tuple(truth[k]) for k in order]),
-             "timed, 10 min a frame": ([600.0 * k for k in range(args.frames)], starts, options)}
+             "timed, 10 min a frame": ([600.0 * k for k in range(args.frames)], starts, options),
+             "timed, a night halfway": ([600.0 * k + (43200.0 if 2 * k >= args.frames else 0.0)
+                                         for k in range(args.frames)], starts, options)}
     out = {}
     for name, call in cases.items():
         best = float("inf")

@@ -129,16 +129,20 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   };
 
   // The grid's cached neighbours (nearest first) out to the largest step
-  // the clip allows, in flat arrays: the recursion reads them for every
-  // direction of every frame, three times, and the per-direction lists of
-  // the grid cost more to walk than the steps themselves.
-  double widest = 0.0;
-  for (int t = 1; t < T; ++t) widest = std::max(widest, radius(t));
-  const bool flat = widest <= grid.cached_radius_deg();
-  std::vector<int64_t> near_first(flat ? D + 1 : 0, 0);
+  // within the cache's radius, in flat arrays: the recursion reads them for
+  // every direction of every frame, three times, and the per-direction
+  // lists of the grid cost more to walk than the steps themselves. A step
+  // beyond the cache (a night between two timed days) scans the grid as
+  // before.
+  double widest = -1.0;
+  for (int t = 1; t < T; ++t) {
+    const double r = radius(t);
+    if (r <= grid.cached_radius_deg()) widest = std::max(widest, r);
+  }
+  std::vector<int64_t> near_first(widest >= 0 ? D + 1 : 0, 0);
   std::vector<int32_t> near_index;
   std::vector<float> near_angle;
-  if (flat) {
+  if (widest >= 0) {
     for (int d = 0; d < D; ++d) {
       for (const SkyGrid::Neighbour& nb : grid.Cached(d)) {
         if (nb.angle_deg > widest) break;
@@ -207,7 +211,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
             if (hard) {
               c = in_min, arg = in_arg;
             } else {
-              if (flat) {
+              if (r <= widest) {
                 c = best_step(d, back_row ? &arg : nullptr);
               } else {
                 for (int p : grid.Within(d, r)) {
