@@ -94,6 +94,12 @@ void BindOptions(py::module_& m) {
                                      "Options of ShadowTracker.")
       .field("ground_object_ids", &ShadowTrackerOptions::ground_object_ids,
              "Object ids of the ground the shadows fall on (at least one).")
+      .field("all_surfaces", &ShadowTrackerOptions::all_surfaces,
+             "Shadows tracked on every model surface in view, not the ground "
+             "alone.")
+      .field("surfaces_pin_deg", &ShadowTrackerOptions::surfaces_pin_deg,
+             "Height left open by the ground beyond this: fitted again on "
+             "every surface, degrees; 0 never.")
       .field("band_radius_px", &ShadowTrackerOptions::band_radius_px,
              "Half-width of the band around predicted shadow boundaries, px.")
       .field("max_band_pixels", &ShadowTrackerOptions::max_band_pixels,

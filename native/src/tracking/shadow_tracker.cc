@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
+#include <tuple>
 
 #include <opencv2/imgproc.hpp>
 
@@ -35,12 +37,19 @@ constexpr double kMinSeenShare = 0.25;
 // A step of the Sun's elevation the band's pixels notice: this many noise
 // variances more of squared residual (TrackedFrame::elevation_pinned_deg).
 constexpr double kPinChi2 = 25.0;
+// Neighbouring pixels whose normals differ by more than about 10 deg lie on
+// different faces.
+constexpr float kSamePlaneCos = 0.985f;
+// The walls' Sun is taken only when at least this share of their band lies
+// off the ground (ShadowTrackerOptions::surfaces_pin_deg).
+constexpr double kMinOffGroundShare = 0.2;
 
 }  // namespace
 
 void ShadowTrackerOptions::Check() const {
   Require(!ground_object_ids.empty(),
           "ground_object_ids: name at least one ground object");
+  Require(surfaces_pin_deg >= 0, "surfaces_pin_deg must be >= 0");
   Require(band_radius_px >= 1 && band_radius_px <= 50,
           "band_radius_px must be in [1, 50]");
   Require(max_band_pixels >= 100, "max_band_pixels must be >= 100");
@@ -75,6 +84,17 @@ struct ShadowTracker::Impl {
     cv::Point px;
   };
   std::vector<GroundPixel> ground;
+  // With all_surfaces: each pixel's face (object and normal, binned), whose
+  // light is fitted on its own (a wall sees less sky than the ground, and
+  // the Sun at another angle).
+  std::vector<int> face;
+  std::vector<uint8_t> face_on_ground;
+  int num_faces = 1;
+  double off_ground_share = 0.0;  // of the last loaded band (all_surfaces)
+  // Without all_surfaces and with surfaces_pin_deg > 0: the same tracker on
+  // every surface, for the frames whose height the ground leaves open.
+  std::unique_ptr<ShadowTracker> surfaces;
+  bool surfaces_started = false;
   std::vector<internal::Caster> casters;
 
   bool mapped = false;  // ground and casters made (once)
@@ -104,6 +124,7 @@ struct ShadowTracker::Impl {
   size_t band_picked = 0;  // band pixels LoadBand looked at (seen or not)
   std::vector<Eigen::Vector3f> band_normal;
   std::vector<int> band_ground;  // per loaded band pixel: its ground index
+  std::vector<int> band_face;    // and its face (all_surfaces)
   std::vector<uint8_t> occluded;
   std::vector<float> lit_origin;  // LitOf's scratch
   // Initialize's scratch over the whole ground, kept: a run initialises
@@ -118,10 +139,48 @@ struct ShadowTracker::Impl {
   Impl(const Scene& s, const Camera& c, const ShadowTrackerOptions& opt)
       : scene(s), camera(c), o(opt), W(c.width()), H(c.height()) {
     if (o.subsamples == 0) o.subsamples = W < 1280 ? 2 : 1;
+    if (!o.all_surfaces && o.surfaces_pin_deg > 0) {
+      ShadowTrackerOptions every = opt;
+      every.all_surfaces = true;
+      surfaces = std::make_unique<ShadowTracker>(s, c, every);
+    }
   }
 
   bool IsGround(int32_t id) const {
     return internal::IsGround(o.ground_object_ids, id);
+  }
+  bool IsReceiver(int32_t id) const { return o.all_surfaces || IsGround(id); }
+
+  std::map<std::tuple<int, int, int>, int> faces;
+  int FaceOf(int32_t object, const Eigen::Vector3f& n) {
+    constexpr double bin = 12.0 * kDeg;
+    const double nz = std::acos(std::clamp(double(n.z()), -1.0, 1.0));
+    const int zbin = static_cast<int>(std::floor(nz / bin));
+    const int abin = zbin == 0 ? 0
+                               : static_cast<int>(std::floor(
+                                     (std::atan2(n.x(), n.y()) + M_PI) / bin));
+    const auto it = faces.emplace(std::make_tuple(int(object), zbin, abin),
+                                  static_cast<int>(faces.size()));
+    if (it.second) face_on_ground.push_back(IsGround(object));
+    num_faces = static_cast<int>(faces.size());
+    return it.first->second;
+  }
+
+  const int* FacesOf(const std::vector<int>& v) const {
+    return o.all_surfaces ? v.data() : nullptr;
+  }
+  int Faces() const { return o.all_surfaces ? num_faces : 1; }
+  // The fit's sun/ambient contrast: on the face with most band pixels.
+  double Contrast(const AffineFit& f, const std::vector<int>& faces_of) const {
+    int g = 0;
+    if (o.all_surfaces && !faces_of.empty()) {
+      std::vector<int> count(num_faces, 0);
+      for (int k : faces_of) ++count[k];
+      g = static_cast<int>(std::max_element(count.begin(), count.end()) -
+                           count.begin());
+    }
+    const double a = f.a[g], b = f.b[g];
+    return a > 0 ? b / a : (b > 0 ? 100.0 : 0.0);
   }
 
   void MapGround() {
@@ -145,7 +204,7 @@ struct ShadowTracker::Impl {
       if (static_cast<int64_t>(hits.object_id.size()) != n) hits = Hits(n);
       scene.IntersectPixels(camera, n, px.data(), hits.buffers());
       for (int64_t i = 0; i < n; ++i) {
-        if (!hits.hit(i) || !IsGround(hits.object_id[i])) continue;
+        if (!hits.hit(i) || !IsReceiver(hits.object_id[i])) continue;
         const int x = static_cast<int>(px[2 * i]),
                   y = static_cast<int>(px[2 * i + 1]);
         ground_index(y, x) = static_cast<int>(ground.size());
@@ -154,6 +213,8 @@ struct ShadowTracker::Impl {
         gp.normal = hits.normal(i);
         gp.origin = hits.point(i) + lift * gp.normal;
         ground.push_back(gp);
+        if (o.all_surfaces)
+          face.push_back(FaceOf(hits.object_id[i], gp.normal));
       }
     }
     ReserveHuge(&tag, ground.size());
@@ -232,6 +293,34 @@ struct ShadowTracker::Impl {
     }
   }
 
+  // The pixels within `stride` of a lit/shadow boundary toward d (on one
+  // plane), the boundaries found on a grid `stride` pixels apart: every
+  // surface looked at for a 1/stride^2 of its rays.
+  std::vector<int> NearBoundaries(const Eigen::Vector3f& d, int stride) {
+    const std::vector<int> coarse = AllGround(stride);
+    const std::vector<uint8_t> lit = LitOf(coarse, d);
+    const int on_grid = ++epoch;
+    for (size_t i = 0; i < coarse.size(); ++i) {
+      tag[coarse[i]] = on_grid;
+      slot[coarse[i]] = static_cast<int>(i);
+    }
+    std::vector<int> seeds;
+    for (size_t i = 0; i < coarse.size(); ++i) {
+      const int gi = coarse[i];
+      const cv::Point p = ground[gi].px;
+      const cv::Point next[2] = {{p.x + stride, p.y}, {p.x, p.y + stride}};
+      for (const cv::Point& q : next) {
+        if (q.x >= W || q.y >= H) continue;
+        const int g = ground_index(q);
+        if (g < 0 || tag[g] != on_grid || lit[slot[g]] == lit[i]) continue;
+        if (ground[g].normal.dot(ground[gi].normal) < kSamePlaneCos) continue;
+        seeds.push_back(gi);
+        seeds.push_back(g);
+      }
+    }
+    return Window(seeds, stride);
+  }
+
   // A sample of the ring r pixels away from `centers` (8 per centre), each
   // pixel once: the outer band's share of the fit without visiting all of it.
   std::vector<int> Ring(const std::vector<int>& centers, int r) {
@@ -286,6 +375,11 @@ struct ShadowTracker::Impl {
         if (g < 0 || (tag[g] != seen && tag[g] != seen - 1)) continue;
         const int gs = slot[g];
         if (lit[gs] == lit[i]) continue;
+        // Only within a plane: where two faces meet (a lit wall over shaded
+        // ground) the step is the faces', whatever the Sun's place.
+        if (o.all_surfaces &&
+            ground[g].normal.dot(ground[gi].normal) < kSamePlaneCos)
+          continue;
         add(gi, lit[i]);
         add(g, lit[gs]);
       }
@@ -397,6 +491,7 @@ struct ShadowTracker::Impl {
     band_origin.clear();
     band_normal.clear();
     band_ground.clear();
+    band_face.clear();
     band_y.clear();
     // The pixels' records and frame values are scattered cache misses:
     // fetched a few pixels ahead, the misses overlap.
@@ -427,10 +522,17 @@ struct ShadowTracker::Impl {
       }
       band_normal.push_back(gp.normal);
       band_ground.push_back(picked[i]);
+      if (o.all_surfaces) band_face.push_back(face[picked[i]]);
       band_y.push_back(o.normalize_albedo ? v / gp.albedo : v);
     }
     band_x.resize(band_y.size());
     occluded.resize(band_origin.size() / 3);
+    off_ground_share = 0.0;
+    if (o.all_surfaces && !band_face.empty()) {
+      size_t off = 0;
+      for (int f : band_face) off += !face_on_ground[f];
+      off_ground_share = static_cast<double>(off) / band_face.size();
+    }
   }
 
   double Cost(const Eigen::Vector3d& toward_sun, double scale) {
@@ -448,8 +550,8 @@ struct ShadowTracker::Impl {
       band_x[i] = lit * std::max(0.f, band_normal[i].dot(d)) / per_pixel;
     }
     const int n = static_cast<int>(band_y.size());
-    RobustAffineFit(n, band_x.data(), band_y.data(), nullptr, 1, scale, 3,
-                    &fit);
+    RobustAffineFit(n, band_x.data(), band_y.data(), FacesOf(band_face),
+                    Faces(), scale, 3, &fit);
     return fit.cost;
   }
 
@@ -483,6 +585,20 @@ struct ShadowTracker::Impl {
     return kInf;
   }
 
+  // Whether `other` explains the band (as loaded) as well as `d` does: its
+  // cost no more than kPinChi2 noise variances above d's (as in
+  // ElevationPinned). Overwrites `fit`.
+  bool FitsAsWell(const Eigen::Vector3d& d, const Eigen::Vector3d& other,
+                  double scale) {
+    const double c0 = Cost(d, scale);
+    if (fit.residual.empty()) return false;
+    std::vector<double> r(fit.residual.size());
+    for (size_t i = 0; i < r.size(); ++i) r[i] = std::abs(fit.residual[i]);
+    const double noise = std::max(1e-6, 1.4826 * MedianInPlace(&r));
+    return (Cost(other, scale) - c0) * scale * scale / (noise * noise) <
+           kPinChi2;
+  }
+
   // Share of the band's pixels on the wrong side of a boundary under the
   // last fit (toward d): the residuals as a mixture of noise about 0 and of
   // pixels one lit/shaded step off either way (the step: the fit's sun term
@@ -498,7 +614,8 @@ struct ShadowTracker::Impl {
     double cos_sum = 0.0;
     for (const Eigen::Vector3f& n : band_normal)
       cos_sum += std::max(0.f, n.dot(df));
-    const double step = fit.b[0] * cos_sum / band_normal.size();
+    double step = fit.b[0] * cos_sum / band_normal.size();
+    if (o.all_surfaces) step = 1.0;  // each pixel's residual in its own steps
     if (!(step > 0)) return 1.0;
     std::vector<double> residual(fit.residual.size());
     float around[9];
@@ -519,6 +636,11 @@ struct ShadowTracker::Impl {
       }
       residual[i] = fit.residual[i] +
                     (k > 0 ? MedianInPlace(around, around + k) - y : 0.0);
+      if (o.all_surfaces) {
+        const double own =
+            fit.b[band_face[i]] * std::max(0.f, band_normal[i].dot(df));
+        residual[i] = own > 0 ? residual[i] / own : 0.0;
+      }
     }
     double m = 0.1, var = 0.0625 * step * step;
     const double n = static_cast<double>(residual.size());
@@ -703,8 +825,7 @@ struct ShadowTracker::Impl {
 
 ShadowTracker::ShadowTracker(const Scene& scene, const Camera& camera,
                              const ShadowTrackerOptions& options)
-    : impl_(std::make_unique<Impl>(scene, camera, options)) {
-  options.Check();
+    : impl_((options.Check(), std::make_unique<Impl>(scene, camera, options))) {
   Require(
       options.ignore_top_rows + options.ignore_bottom_rows < camera.height(),
       "ignore_top_rows + ignore_bottom_rows leave no rows");
@@ -756,12 +877,14 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   ReserveHuge(&y, all.size());
   x.resize(all.size());
   y.resize(all.size());
+  std::vector<int> faces_seen;
   size_t seen = 0;
   for (size_t i = 0; i < all.size(); ++i) {
     const float v = frame.at<float>(s.ground[all[i]].px);
     if (std::isnan(v)) continue;
     x[seen] = s.Shading(all[i], df, !lit[i]);
     y[seen++] = v;
+    if (s.o.all_surfaces) faces_seen.push_back(s.face[all[i]]);
   }
   if (seen == 0 || seen < all.size() * kMinSeenShare) {
     out.reason = "the ground is out of view on this frame";
@@ -773,8 +896,8 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   const double scale = std::max(1e-4, s.o.loss_scale * MedianInPlace(&sorted));
   AffineFit& fit = s.init_fit;
   ReserveHuge(&fit.residual, seen);
-  RobustAffineFit(static_cast<int>(seen), x.data(), y.data(), nullptr, 1, scale,
-                  4, &fit);
+  RobustAffineFit(static_cast<int>(seen), x.data(), y.data(),
+                  s.FacesOf(faces_seen), s.Faces(), scale, 4, &fit);
   std::vector<int> shadowed;
   s.band = s.BandAround(all, df, false, &shadowed, &lit);
   s.FindEdgeCasters(shadowed, d);
@@ -782,18 +905,20 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   std::vector<uint8_t>& near_edge = s.init_near_edge;  // per ground pixel
   near_edge.assign(s.ground.size(), 0);
   for (int g : s.band) near_edge[g] = 1;  // unreliable: lit state uncertain
-  const double a = fit.a[0], b = fit.b[0];
   for (size_t i = 0; i < all.size(); ++i) {
     const int g = all[i];
     const float v = frame.at<float>(s.ground[g].px);
-    const double model = a + b * s.Shading(g, df, !lit[i]);
+    const int f = s.o.all_surfaces ? s.face[g] : 0;
+    const double model = fit.a[f] + fit.b[f] * s.Shading(g, df, !lit[i]);
     if (model > 1e-4 && !std::isnan(v) && !near_edge[g]) {
       s.ground[g].albedo =
           std::clamp(static_cast<float>(v / model), 0.05f, 20.f);
     }
   }
-  out.contrast =
-      fit.a[0] > 0 ? fit.b[0] / fit.a[0] : (fit.b[0] > 0 ? 100.0 : 0.0);
+  std::vector<int> band_faces;  // the contrast is the band's main face's
+  if (s.o.all_surfaces)
+    for (int g : s.band) band_faces.push_back(s.face[g]);
+  out.contrast = s.Contrast(fit, band_faces);
   out.band_pixels = static_cast<int>(s.band.size());
   out.ok = !s.band.empty();
   out.confidence = out.ok ? 1.0 : 0.0;
@@ -866,12 +991,15 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   }
   if (band.empty()) {
     s.frames_since_refresh = 0;
+    // On every surface a wall's shadow can appear far from the last
+    // boundaries: its refresh looks everywhere, first on a coarse grid.
     const std::vector<int> candidates =
-        (!last_boundary.empty() && s.lost == 0)
+        s.o.all_surfaces ? s.NearBoundaries(pf, std::max(2, s.W / 240))
+        : (!last_boundary.empty() && s.lost == 0)
             ? s.Window(last_boundary, s.o.band_radius_px + 2)
             : s.AllGround(1);
     band = s.BandAround(candidates, pf, true, &shadowed);
-    if (band.empty() && s.lost == 0)
+    if (band.empty() && s.lost == 0 && !s.o.all_surfaces)
       band = s.BandAround(s.AllGround(1), pf, true, &shadowed);
   }
   if (band.empty()) {
@@ -886,6 +1014,14 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   if (s.band_y.empty() || s.band_y.size() < s.band_picked * kMinSeenShare) {
     ++s.lost;
     out.reason = "the shadows' band is out of view on this frame";
+    return finish(pred);
+  }
+  // On every surface, a band on the ground alone is the ground's fit again
+  // on another band, not the walls' say: on the real sundial clips taking
+  // it moved the low Sun's frames by up to 2 deg, and their smoothed Sun
+  // 0.1 deg further off.
+  if (s.o.all_surfaces && s.off_ground_share < kMinOffGroundShare) {
+    out.reason = "the shadows' band lies on the ground alone";
     return finish(pred);
   }
   std::vector<float> sorted = s.band_y;
@@ -910,8 +1046,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
                  " deg of the predicted Sun";
     return finish(pred);
   }
-  const double a = s.fit.a[0], b = s.fit.b[0];
-  out.contrast = a > 0 ? b / a : (b > 0 ? 100.0 : 0.0);
+  out.contrast = s.Contrast(s.fit, s.band_face);
   out.band_pixels = static_cast<int>(s.band_y.size());
   int inliers = 0;
   for (double r : s.fit.residual) inliers += std::abs(r) < 3 * scale;
@@ -929,13 +1064,34 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
       inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
   out.misfit = s.Misfit(frame, found);
   out.elevation_pinned_deg = s.ElevationPinned(found, scale);
+  Eigen::Vector3d kept = found;
+  // The ground's shadows leave the Sun's height open (their far ends out of
+  // view, or on a wall): the frame is fitted again on every surface in view,
+  // from here. Its Sun is taken only when it pins the height and explains
+  // the ground's shadows as well (a misplaced box's faces can pin a wrong
+  // Sun); the ground's fit keeps its say on the contrast and the misfit,
+  // which the clip's rules were set on.
+  if (s.surfaces && out.elevation_pinned_deg > s.o.surfaces_pin_deg) {
+    if (!s.surfaces_started) {
+      s.surfaces->Initialize(frame, found);
+      s.surfaces_started = true;
+    }
+    const TrackedFrame w = s.surfaces->Track(frame, found);
+    s.rays_cast += w.rays;
+    s.evaluations += w.evaluations;
+    if (w.ok && w.elevation_pinned_deg <= s.o.surfaces_pin_deg &&
+        s.FitsAsWell(found, w.sun_in_world, scale)) {
+      kept = w.sun_in_world;
+      out.elevation_pinned_deg = w.elevation_pinned_deg;
+    }
+  }
   // After a loss the velocity is unknown again: it restarts from this frame.
   s.have_velocity = s.lost == 0;
   s.sun_before = s.sun;
-  s.last_correction_deg = AngleBetweenDeg(found, pred);
-  s.sun = found;
+  s.last_correction_deg = AngleBetweenDeg(kept, pred);
+  s.sun = kept;
   s.lost = 0;
-  return finish(found);
+  return finish(kept);
 }
 
 }  // namespace sunlapse

@@ -354,9 +354,49 @@ TEST(ShadowTracker, ElevationIsPinnedOnlyWithTheShadowsFarEndInView) {
   EXPECT_GT(tight, 8.0);
 }
 
+// A pole's shadow that runs into a wall ends, on the ground, at the wall's
+// foot whatever the Sun's height: the ground leaves the height open. On the
+// wall its far end (the pole's top) pins it, and the tracker fits such a
+// frame again on every surface in view (surfaces_pin_deg).
+TEST(ShadowTracker, AWallPinsTheHeightTheGroundLeavesOpen) {
+  testing::Mesh mesh = testing::PoleOnGround(12.f, 2.5f);
+  mesh.Box({-6, 2, 0}, {6, 2.3f, 4}, 2);
+  const Scene scene = mesh.Build();
+  const Camera cam = testing::LookAt({4, -6, 5}, {0, 1.5, 0.6}, 320, 240);
+  // The shadow runs 3 m toward +Y: 2 m on the ground, then 0.8 m up the wall.
+  const Eigen::Vector3d truth = Sun(50, 180);
+  auto track = [&](double surfaces_pin_deg) {
+    ShadowTrackerOptions o;
+    o.ground_object_ids = {0};
+    o.surfaces_pin_deg = surfaces_pin_deg;
+    ShadowTracker tracker(scene, cam, o);
+    tracker.Initialize(
+        testing::RenderLambertian(scene, cam, truth, Textured(1)), truth);
+    // Searched from a Sun 4 deg too high (a path's cell along the shadow).
+    return tracker.Track(
+        testing::RenderLambertian(scene, cam, truth, Textured(2)),
+        Sun(46, 180));
+  };
+  const TrackedFrame ground = track(0.0);
+  const TrackedFrame walls = track(ShadowTrackerOptions().surfaces_pin_deg);
+  ASSERT_TRUE(ground.ok) << ground.reason;
+  ASSERT_TRUE(walls.ok) << walls.reason;
+  std::printf(
+      "ground alone: %.2f deg off, pinned within %g; with the wall: %.2f deg "
+      "off, pinned within %g\n",
+      AngleBetweenDeg(ground.sun_in_world, truth), ground.elevation_pinned_deg,
+      AngleBetweenDeg(walls.sun_in_world, truth), walls.elevation_pinned_deg);
+  EXPECT_GT(ground.elevation_pinned_deg, 2.0);
+  EXPECT_LE(walls.elevation_pinned_deg, 1.0);
+  EXPECT_LT(AngleBetweenDeg(walls.sun_in_world, truth), 0.5);
+}
+
 TEST(ShadowTracker, RejectsBadSetup) {
   Fixture fx;
   ShadowTrackerOptions o;  // no ground
+  EXPECT_THROW(ShadowTracker(fx.scene, fx.cam, o), std::invalid_argument);
+  o = fx.Options();
+  o.surfaces_pin_deg = -1;
   EXPECT_THROW(ShadowTracker(fx.scene, fx.cam, o), std::invalid_argument);
   ShadowTracker tracker(fx.scene, fx.cam, fx.Options());
   EXPECT_THROW(tracker.Track(cv::Mat(240, 320, CV_32F, 0.5f)),

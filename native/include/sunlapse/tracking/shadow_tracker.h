@@ -30,6 +30,14 @@ namespace sunlapse {
 struct ShadowTrackerOptions {
   // Object ids of the ground the shadows fall on (at least one).
   std::vector<int32_t> ground_object_ids;
+  // Shadows are tracked on every model surface in view (walls and roofs the
+  // casters shade), not on the ground alone; the rest still cast.
+  bool all_surfaces = false;
+  // On the ground alone (all_surfaces false): a frame whose Sun's height the
+  // ground's shadows pin no closer than this (deg; TrackedFrame::
+  // elevation_pinned_deg) is fitted again on every surface in view, and
+  // takes that Sun where the walls pin it this close. 0: never.
+  double surfaces_pin_deg = 2.0;
   // Half-width of the band around predicted shadow boundaries (pixels).
   int band_radius_px = 4;
   // At most this many band pixels are used per frame (a regular subsample):
