@@ -231,20 +231,13 @@ struct SkyEvidence::Impl {
     const int gh = (y1 - (y0 + stride / 2) + stride - 1) / stride;
     std::vector<int32_t> cell(static_cast<size_t>(gw) * gh, -1);
     std::vector<std::pair<int, int>> cells;
-    const double bin = o.normal_bin_deg * kDeg;
     for (size_t i = 0; i < hits.object_id.size(); ++i) {
       if (!hits.hit(i)) continue;
       const Eigen::Vector3f n = hits.normal(i);
       const Eigen::Vector3f p = hits.point(i);
       if (!n.allFinite() || !p.allFinite()) continue;
       // Group key: object and the normal's direction binned in zenith/azimuth.
-      const double nz = std::acos(std::clamp(double(n.z()), -1.0, 1.0));
-      const int zbin = static_cast<int>(std::floor(nz / bin));
-      const int abin =
-          zbin == 0
-              ? 0
-              : static_cast<int>(std::floor(
-                    (std::atan2(double(n.x()), double(n.y())) + M_PI) / bin));
+      const auto [zbin, abin] = NormalBin(n, o.normal_bin_deg);
       const auto key = std::make_tuple(int(hits.object_id[i]), zbin, abin, 0);
       auto it = groups.find(key);
       if (it == groups.end())

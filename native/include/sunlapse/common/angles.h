@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 namespace sunlapse {
@@ -60,6 +61,20 @@ inline double AzimuthGeographicFromWorld(double azimuth_world_deg,
 inline double AngleBetweenDeg(const Eigen::Vector3d& a,
                               const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) / kRadPerDeg;
+}
+
+// A surface normal's cell, bin_deg wide in zenith and in azimuth (one cell
+// about the zenith): the faces of a model that share one cell and one
+// object are one plane, lit alike by the Sun.
+inline std::pair<int, int> NormalBin(const Eigen::Vector3f& n, double bin_deg) {
+  const double bin = bin_deg * kRadPerDeg;
+  const double nz = std::acos(std::clamp(double(n.z()), -1.0, 1.0));
+  const int zbin = static_cast<int>(std::floor(nz / bin));
+  const int abin =
+      zbin == 0 ? 0
+                : static_cast<int>(std::floor(
+                      (std::atan2(double(n.x()), double(n.y())) + M_PI) / bin));
+  return {zbin, abin};
 }
 
 // About n nearly uniform directions over the sky from the zenith down to
