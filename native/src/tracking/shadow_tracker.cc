@@ -858,6 +858,8 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   s.have_velocity = false;
   s.lost = 0;
   s.initialized = true;
+  // The walls' tracker starts again too, from the next frame that needs it.
+  s.surfaces_started = false;
   s.Describe(d, &out);
   if (s.ground.empty()) {
     out.reason = "no ground in view: check the ground objects and the camera";

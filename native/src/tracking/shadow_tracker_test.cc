@@ -391,6 +391,33 @@ TEST(ShadowTracker, AWallPinsTheHeightTheGroundLeavesOpen) {
   EXPECT_LT(AngleBetweenDeg(walls.sun_in_world, truth), 0.5);
 }
 
+// Initialised again (a run's re-acquisition), the tracker starts its walls'
+// fit afresh too: its albedo is not the one of a frame before.
+TEST(ShadowTracker, InitialisedAgainFitsTheWallsAsAFreshOne) {
+  testing::Mesh mesh = testing::PoleOnGround(12.f, 2.5f);
+  mesh.Box({-6, 2, 0}, {6, 2.3f, 4}, 2);
+  const Scene scene = mesh.Build();
+  const Camera cam = testing::LookAt({4, -6, 5}, {0, 1.5, 0.6}, 320, 240);
+  ShadowTrackerOptions o;
+  o.ground_object_ids = {0};
+  const Eigen::Vector3d truth = Sun(50, 180), earlier = Sun(56, 165);
+  const cv::Mat f0 = testing::RenderLambertian(scene, cam, truth, Textured(1));
+  const cv::Mat f1 = testing::RenderLambertian(scene, cam, truth, Textured(2));
+  ShadowTracker fresh(scene, cam, o), again(scene, cam, o);
+  fresh.Initialize(f0, truth);
+  const TrackedFrame want = fresh.Track(f1, Sun(46, 180));
+  // The walls' fit first started on another frame, under another Sun.
+  again.Initialize(testing::RenderLambertian(scene, cam, earlier, Textured(3)),
+                   earlier);
+  again.Track(testing::RenderLambertian(scene, cam, earlier, Textured(4)),
+              Sun(52, 165));
+  again.Initialize(f0, truth);
+  const TrackedFrame got = again.Track(f1, Sun(46, 180));
+  ASSERT_TRUE(want.ok && got.ok);
+  EXPECT_EQ(got.sun_in_world, want.sun_in_world);
+  EXPECT_EQ(got.elevation_pinned_deg, want.elevation_pinned_deg);
+}
+
 TEST(ShadowTracker, RejectsBadSetup) {
   Fixture fx;
   ShadowTrackerOptions o;  // no ground
