@@ -93,7 +93,6 @@ struct ShadowTracker::Impl {
   std::vector<int> face;
   std::vector<uint8_t> face_on_ground;
   int num_faces = 1;
-  double off_ground_share = 0.0;  // of the last loaded band (all_surfaces)
   // Without all_surfaces and with surfaces_pin_deg > 0: the same tracker on
   // every surface, for the frames whose height the ground leaves open.
   std::unique_ptr<ShadowTracker> surfaces;
@@ -153,6 +152,11 @@ struct ShadowTracker::Impl {
     return internal::IsGround(o.ground_object_ids, id);
   }
   bool IsReceiver(int32_t id) const { return o.all_surfaces || IsGround(id); }
+  // Ground pixels a and b lie on one plane: where two faces meet (a lit wall
+  // over shaded ground) the lit/shaded step is the faces', whatever the Sun.
+  bool OnePlane(int a, int b) const {
+    return ground[a].normal.dot(ground[b].normal) >= kSamePlaneCos;
+  }
 
   std::map<std::tuple<int, int, int>, int> faces;
   int FaceOf(int32_t object, const Eigen::Vector3f& n) {
@@ -168,6 +172,12 @@ struct ShadowTracker::Impl {
     return o.all_surfaces ? v.data() : nullptr;
   }
   int Faces() const { return o.all_surfaces ? num_faces : 1; }
+  // Share of the loaded band (all_surfaces) off the ground's faces.
+  double OffGroundShare() const {
+    size_t off = 0;
+    for (int f : band_face) off += !face_on_ground[f];
+    return band_face.empty() ? 0.0 : double(off) / band_face.size();
+  }
   // The fit's sun/ambient contrast: on the face with most band pixels.
   double Contrast(const AffineFit& f, const std::vector<int>& faces_of) const {
     int g = 0;
@@ -311,7 +321,7 @@ struct ShadowTracker::Impl {
         if (q.x >= W || q.y >= H) continue;
         const int g = ground_index(q);
         if (g < 0 || tag[g] != on_grid || lit[slot[g]] == lit[i]) continue;
-        if (ground[g].normal.dot(ground[gi].normal) < kSamePlaneCos) continue;
+        if (!OnePlane(g, gi)) continue;
         seeds.push_back(gi);
         seeds.push_back(g);
       }
@@ -373,11 +383,7 @@ struct ShadowTracker::Impl {
         if (g < 0 || (tag[g] != seen && tag[g] != seen - 1)) continue;
         const int gs = slot[g];
         if (lit[gs] == lit[i]) continue;
-        // Only within a plane: where two faces meet (a lit wall over shaded
-        // ground) the step is the faces', whatever the Sun's place.
-        if (o.all_surfaces &&
-            ground[g].normal.dot(ground[gi].normal) < kSamePlaneCos)
-          continue;
+        if (o.all_surfaces && !OnePlane(g, gi)) continue;
         add(gi, lit[i]);
         add(g, lit[gs]);
       }
@@ -525,12 +531,6 @@ struct ShadowTracker::Impl {
     }
     band_x.resize(band_y.size());
     occluded.resize(band_origin.size() / 3);
-    off_ground_share = 0.0;
-    if (o.all_surfaces && !band_face.empty()) {
-      size_t off = 0;
-      for (int f : band_face) off += !face_on_ground[f];
-      off_ground_share = static_cast<double>(off) / band_face.size();
-    }
   }
 
   double Cost(const Eigen::Vector3d& toward_sun, double scale) {
@@ -553,15 +553,22 @@ struct ShadowTracker::Impl {
     return fit.cost;
   }
 
-  // See TrackedFrame::elevation_pinned_deg. The fit's noise is the MAD of
-  // its residuals at d; with the Cauchy scale well above it a cost step
-  // is a chi-square step times noise^2 / scale^2. Overwrites `fit`.
-  double ElevationPinned(const Eigen::Vector3d& d, double scale) {
-    if (fit.residual.empty()) return kInf;
+  // Cost steps to noise variances under the last fit: its noise is the MAD
+  // of its residuals; with the Cauchy scale well above it a cost step is a
+  // chi-square step times noise^2 / scale^2. 0 without residuals.
+  double CostToChi2(double scale) const {
+    if (fit.residual.empty()) return 0.0;
     std::vector<double> r(fit.residual.size());
     for (size_t i = 0; i < r.size(); ++i) r[i] = std::abs(fit.residual[i]);
     const double noise = std::max(1e-6, 1.4826 * MedianInPlace(&r));
-    const double to_chi2 = scale * scale / (noise * noise);
+    return scale * scale / (noise * noise);
+  }
+
+  // See TrackedFrame::elevation_pinned_deg; the fit at d is the last one.
+  // Overwrites `fit`.
+  double ElevationPinned(const Eigen::Vector3d& d, double scale) {
+    if (fit.residual.empty()) return kInf;
+    const double to_chi2 = CostToChi2(scale);
     const double c0 = fit.cost;
     Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - d.z() * d;
     if (up.norm() < 1e-9) return 0.0;  // overhead: every way is down
@@ -590,11 +597,8 @@ struct ShadowTracker::Impl {
                   double scale) {
     const double c0 = Cost(d, scale);
     if (fit.residual.empty()) return false;
-    std::vector<double> r(fit.residual.size());
-    for (size_t i = 0; i < r.size(); ++i) r[i] = std::abs(fit.residual[i]);
-    const double noise = std::max(1e-6, 1.4826 * MedianInPlace(&r));
-    return (Cost(other, scale) - c0) * scale * scale / (noise * noise) <
-           kPinChi2;
+    const double to_chi2 = CostToChi2(scale);
+    return (Cost(other, scale) - c0) * to_chi2 < kPinChi2;
   }
 
   // Share of the band's pixels on the wrong side of a boundary under the
@@ -1020,7 +1024,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   // on another band, not the walls' say: on the real sundial clips taking
   // it moved the low Sun's frames by up to 2 deg, and their smoothed Sun
   // 0.1 deg further off.
-  if (s.o.all_surfaces && s.off_ground_share < kMinOffGroundShare) {
+  if (s.o.all_surfaces && s.OffGroundShare() < kMinOffGroundShare) {
     out.reason = "the shadows' band lies on the ground alone";
     return finish(pred);
   }
