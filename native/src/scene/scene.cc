@@ -429,20 +429,17 @@ void Scene::Occluded(int64_t n, const float* origins, const float* directions,
       t_near, t_far, false, occluded);
 }
 
-void Scene::OccludedToward(int64_t n, const float* origins,
-                           const Eigen::Vector3f& direction, float t_near,
-                           float t_far, uint8_t* occluded) const {
-  Require(n >= 0, "n must be >= 0");
-  Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
-  Require(direction.allFinite() && direction.norm() > 0,
-          "direction must be finite and non-zero");
-  const Eigen::Vector3f d = direction.normalized();
-  RTCScene scene = impl_->scene;
-  // One direction and neighbouring origins: packets of 16 rays traverse the
-  // BVH together, several times faster than single rays here. Tasks of 16
-  // packets: the tracker casts a few thousand rays at a time, which larger
-  // tasks split unevenly over the cores (1080p tracking benchmark: 1.9 ->
-  // 1.65 ms per frame, and steadier).
+namespace {
+// Rays toward one direction d (unit) from origin_of(i), i < n. Neighbouring
+// origins and one direction: packets of 16 rays traverse the BVH together,
+// several times faster than single rays here. Tasks of 16 packets: the
+// tracker casts a few thousand rays at a time, which larger tasks split
+// unevenly over the cores (1080p tracking benchmark: 1.9 -> 1.65 ms per
+// frame, and steadier).
+template <typename OriginOf>
+void OccludedPackets(RTCScene scene, int64_t n, OriginOf origin_of,
+                     const Eigen::Vector3f& d, float t_near, float t_far,
+                     uint8_t* occluded) {
   constexpr int kPacket = 16;
   tbb::parallel_for(
       tbb::blocked_range<int64_t>(0, (n + kPacket - 1) / kPacket, 16),
@@ -467,7 +464,7 @@ void Scene::OccludedToward(int64_t n, const float* origins,
           const int64_t base = p * kPacket;
           for (int k = 0; k < kPacket; ++k) {
             const int64_t i = base + k;
-            const float* o = origins + 3 * std::min(i, n - 1);
+            const float* o = origin_of(std::min(i, n - 1));
             valid[k] = (i < n && std::isfinite(o[0]) && std::isfinite(o[1]) &&
                         std::isfinite(o[2]))
                            ? -1
@@ -483,6 +480,36 @@ void Scene::OccludedToward(int64_t n, const float* origins,
           }
         }
       });
+}
+
+Eigen::Vector3f CheckedToward(int64_t n, const Eigen::Vector3f& direction,
+                              float t_near, float t_far) {
+  Require(n >= 0, "n must be >= 0");
+  Require(t_near >= 0 && t_far >= t_near, "need 0 <= t_near <= t_far");
+  Require(direction.allFinite() && direction.norm() > 0,
+          "direction must be finite and non-zero");
+  return direction.normalized();
+}
+}  // namespace
+
+void Scene::OccludedToward(int64_t n, const float* origins,
+                           const Eigen::Vector3f& direction, float t_near,
+                           float t_far, uint8_t* occluded) const {
+  const Eigen::Vector3f d = CheckedToward(n, direction, t_near, t_far);
+  OccludedPackets(
+      impl_->scene, n, [origins](int64_t i) { return origins + 3 * i; }, d,
+      t_near, t_far, occluded);
+}
+
+void Scene::OccludedTowardSubset(int64_t n, const int32_t* which,
+                                 const float* origins,
+                                 const Eigen::Vector3f& direction, float t_near,
+                                 float t_far, uint8_t* occluded) const {
+  const Eigen::Vector3f d = CheckedToward(n, direction, t_near, t_far);
+  OccludedPackets(
+      impl_->scene, n,
+      [which, origins](int64_t i) { return origins + 3 * int64_t{which[i]}; },
+      d, t_near, t_far, occluded);
 }
 
 }  // namespace sunlapse

@@ -2,6 +2,7 @@
 
 #include "synthetic.h"
 
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -191,6 +192,38 @@ TEST(Scene, OccludedTowardAgreesWithSingleRaysOnManyRays) {
     shadowed += a[i];
   }
   EXPECT_GT(shadowed, 100);
+}
+
+TEST(Scene, OccludedTowardASubsetIsTheSameRaysFromItsOrigins) {
+  const Scene scene = BoxOnPlane();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-4, 4);
+  const int n = 3001;
+  std::vector<float> origins(3 * n);
+  for (int i = 0; i < n; ++i) {
+    origins[3 * i] = u(rng);
+    origins[3 * i + 1] = u(rng);
+    origins[3 * i + 2] = 0.01f;
+  }
+  // Every third origin, backwards, and one twice: not a multiple of the
+  // packet size, and not in order.
+  std::vector<int32_t> which;
+  for (int i = n - 1; i >= 0; i -= 3) which.push_back(i);
+  which.push_back(which.front());
+  std::vector<float> copied;
+  for (int32_t i : which) {
+    copied.insert(copied.end(), origins.begin() + 3 * i,
+                  origins.begin() + 3 * i + 3);
+  }
+  const Eigen::Vector3f d = Eigen::Vector3f(-0.5f, 0.2f, 0.7f).normalized();
+  const int64_t m = static_cast<int64_t>(which.size());
+  std::vector<uint8_t> a(m), b(m);
+  scene.OccludedToward(m, copied.data(), d, 0.f, INFINITY, a.data());
+  scene.OccludedTowardSubset(m, which.data(), origins.data(), d, 0.f, INFINITY,
+                             b.data());
+  EXPECT_EQ(a, b);
+  EXPECT_GT(std::count(a.begin(), a.end(), 1), 30);
+  EXPECT_GT(std::count(a.begin(), a.end(), 0), 30);
 }
 
 TEST(Scene, NonFiniteRaysAreMissesNotCrashes) {
