@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <stdexcept>
 #include <tuple>
 
@@ -135,6 +136,7 @@ struct ShadowTracker::Impl {
   std::vector<float> init_x, init_y, init_sorted;
   std::vector<uint8_t> init_near_edge;
   AffineFit init_fit;
+  std::vector<int> every;  // every ground pixel's index, 0 to n - 1
   AffineFit fit;
   int64_t rays_cast = 0, evaluations = 0;  // counters of the current frame
 
@@ -229,6 +231,22 @@ struct ShadowTracker::Impl {
     ReserveHuge(&slot, ground.size());
     tag.assign(ground.size(), 0);
     slot.assign(ground.size(), 0);
+    ReserveHuge(&every, ground.size());
+    every.resize(ground.size());
+    std::iota(every.begin(), every.end(), 0);
+    // Initialize's scratch over the whole ground, written once here: this
+    // runs beside the reference frames' decoding, and the first frame's
+    // start paid these pages' faults (at 1080p, half of its time).
+    const size_t n = ground.size();
+    for (std::vector<float>* v : {&init_x, &init_y, &init_sorted}) {
+      ReserveHuge(v, n);
+      v->assign(n, 0.f);
+    }
+    ReserveHuge(&init_fit.residual, n);
+    init_fit.residual.assign(n, 0.0);
+    ReserveHuge(&lit_origin, 3 * n);
+    lit_origin.assign(3 * n, 0.f);
+    init_near_edge.assign(n, 0);
   }
 
   // How ground pixel g's point moves per pixel step (dx, dy), from its
@@ -872,7 +890,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   // Shadows of the first frame, and the ground's albedo relative to its
   // median: I = rho (A + S shading) with A, S fitted robustly on the ground.
   const Eigen::Vector3f df = d.cast<float>();
-  const std::vector<int> all = s.AllGround(1);
+  const std::vector<int>& all = s.every;
   const std::vector<uint8_t> lit = s.LitOf(all, df);
   // Ground a moving camera's frame does not see is NaN (view_warp.h): left
   // out of the fit (its samples first, in x and y), its albedo left at 1.
@@ -1001,10 +1019,10 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
         s.o.all_surfaces ? s.NearBoundaries(pf, std::max(2, s.W / 240))
         : (!last_boundary.empty() && s.lost == 0)
             ? s.Window(last_boundary, s.o.band_radius_px + 2)
-            : s.AllGround(1);
+            : s.every;
     band = s.BandAround(candidates, pf, true, &shadowed);
     if (band.empty() && s.lost == 0 && !s.o.all_surfaces)
-      band = s.BandAround(s.AllGround(1), pf, true, &shadowed);
+      band = s.BandAround(s.every, pf, true, &shadowed);
   }
   if (band.empty()) {
     ++s.lost;
