@@ -4,7 +4,7 @@ smoothing past a segment's span."""
 
 from __future__ import annotations
 
-from typing import Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 from . import native_loader
 
@@ -19,3 +19,16 @@ def sun_motion_bound_deg(k: int, j: int, times_s: Optional[Sequence[float]],
     if times_s is not None:
         return abs(times_s[k] - times_s[j]) / 3600.0 * o.max_speed_deg_per_hour
     return abs(k - j) * o.max_step_deg
+
+
+def segment_bounds(starts: Sequence) -> List[int]:
+    """A run's segment bounds: 0, each position whose flag in `starts` is
+    set (a segment start, or a jump of the path's), and the run's length."""
+    n = len(starts)
+    return [0] + [k for k in range(1, n) if starts[k]] + [n]
+
+
+def segment_ranges(starts: Sequence) -> List[Tuple[int, int]]:
+    """The run's segments as [lo, hi) position ranges (segment_bounds)."""
+    bounds = segment_bounds(starts)
+    return list(zip(bounds[:-1], bounds[1:]))

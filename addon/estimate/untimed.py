@@ -16,6 +16,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from . import motion
 from ..core import angles
 
 # Without capture times a loop whose Sun goes back less than the path's
@@ -193,11 +194,9 @@ def pace_clock(suns: Sequence[Optional[np.ndarray]], numbers: Sequence[int],
     way the Sun has come since, in frames of the segment's median pace.
     None when no segment's pace changes. suns: per frame the Sun (None:
     none); numbers: the frame numbers; starts: the segments."""
-    n = len(numbers)
     clock = [float(f) for f in numbers]
-    bounds = [0] + [k for k in range(1, n) if starts[k]] + [n]
     changed = False
-    for lo, hi in zip(bounds[:-1], bounds[1:]):
+    for lo, hi in motion.segment_ranges(starts):
         run = SunRun(suns[lo:hi])
         h = _group(run.step, PACE_MOTION_DEG, REVERSAL_GROUP_MAX)
         if len(run.seen) < 6 * h:

@@ -305,12 +305,6 @@ def working_factor(width: int) -> int:
     return factor
 
 
-def _segments(jump_before: Sequence[bool], n: int) -> List[Tuple[int, int]]:
-    """[lo, hi) index ranges between the path's jumps and segment starts."""
-    bounds = [0] + [k for k in range(1, n) if jump_before[k]] + [n]
-    return list(zip(bounds[:-1], bounds[1:]))
-
-
 def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                   directions: Sequence[Sequence[float]],
                   times_s: Optional[Sequence[float]], n: int,
@@ -323,7 +317,7 @@ def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
     grid step."""
     prior = np.full((n, 3), np.nan)
     strayed = False
-    for lo, hi in _segments(path.jump_before, n):
+    for lo, hi in motion.segment_ranges(path.jump_before):
         ks = list(range(lo, hi))
         suns = [directions[path.direction[k]]
                 if path.measured[k] and path.direction[k] >= 0 else None for k in ks]
@@ -747,8 +741,7 @@ class _WholeClip:
         evidence figures and the best-supported frame."""
         path, frames, n = self.path, self.frames, self.n
         self.bounds = _without_dark_segments(
-            [0] + [k for k in range(1, n) if path.jump_before[k]] + [n],
-            path.measured, self.starts)
+            motion.segment_bounds(path.jump_before), path.measured, self.starts)
         self.result.jumps = self.unexplained_jumps()
         d = self.directions
         self.result.evidence = {
@@ -911,14 +904,11 @@ class _WholeClip:
         night = set(self.night_by_the_clock())
         self.result.clock_night = [self.frames[k] for k in sorted(night)]
         for k, r in enumerate(self.result.frames):
-            hazy = r.tracked is not None and _contrast(r.tracked) < SUNLIT_MIN_CONTRAST
             if k in night or any(sun is not None and sun[2] <= 0.0
                                  for sun in (r.sun_in_world, r.circle_in_world)):
                 r.sunlight = Sunlight.NO
                 self.unlit(r, "the Sun is below the horizon here")
-            elif r.sunlight == Sunlight.YES and r.circle_in_world is not None and \
-                    angles.angle_between_deg(r.sun_in_world, r.circle_in_world) > (
-                        CIRCLE_DOUBT_DEG if hazy else OFF_CIRCLE_UNLIT_DEG):
+            elif r.sunlight == Sunlight.YES and _not_the_suns(r, r.circle_in_world):
                 r.sunlight = Sunlight.UNKNOWN
                 self.unlit(r, "the shadows on this frame are not where the Sun's path puts "
                               "them")
@@ -1120,15 +1110,23 @@ def _segment_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_s
     return (fit, by_pinned) if fit.success else None
 
 
+def _not_the_suns(r: "RawFrame", circle_in_world) -> bool:
+    """Whether a frame's Sun is so far off its circle's (OFF_CIRCLE_UNLIT_DEG;
+    a hazy Sun's faint shadows, CIRCLE_DOUBT_DEG) that its shadows are taken
+    for shadows that are not the Sun's."""
+    if r.sun_in_world is None or circle_in_world is None:
+        return False
+    hazy = r.tracked is not None and _contrast(r.tracked) < SUNLIT_MIN_CONTRAST
+    return angles.angle_between_deg(r.sun_in_world, circle_in_world) > (
+        CIRCLE_DOUBT_DEG if hazy else OFF_CIRCLE_UNLIT_DEG)
+
+
 def _unlit_by(segment: Sequence[RawFrame], circle: Optional[Tuple[Any, bool]]) -> int:
-    """How many of the segment's Suns the circle puts further off than
-    OFF_CIRCLE_UNLIT_DEG (sunlight_against_circle takes them for shadows
-    that are not the Sun's)."""
+    """How many of the segment's Suns the circle would take for shadows that
+    are not the Sun's (_not_the_suns, as sunlight_against_circle does)."""
     if circle is None:
         return 0
-    return sum(r.sun_in_world is not None and angles.angle_between_deg(
-        r.sun_in_world, circle[0].sun_in_world[i]) > OFF_CIRCLE_UNLIT_DEG
-        for i, r in enumerate(segment))
+    return sum(_not_the_suns(r, circle[0].sun_in_world[i]) for i, r in enumerate(segment))
 
 
 def _doubt_by(segment: Sequence[RawFrame], fit: Any, by_pinned: bool) -> None:
