@@ -255,6 +255,27 @@ def test_a_clip_whose_model_does_not_fit_its_footage_stays_below_one_half_and_sa
     assert back.frames[5].sun_height_pinned_deg == 90.0
 
 
+def test_shadows_the_model_does_not_cast_stay_named_when_the_model_misfits():
+    """A tree's shadow over the ground (not in the model) makes the model's
+    shadows miss the footage's as a misplaced caster does: the hint about
+    those shadows, reported first, is kept and named as a cause."""
+    limit = calibration.MODEL_MISFIT_MAX
+    raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97, sunlight=trackfile.Sunlight.YES,
+                   tracked=_Tracked(limit + 0.1)) for f in range(1, 8)]
+    track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                    "smoothing": "two_pass"})
+    seen = "1 hard ground shadow(s) on frame 4 are not cast by the model"
+    track.report("model", trackfile.ProblemKind.HINT, seen)
+    finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
+                  [[r.frame for r in raws]])
+    hint = track.problem("model")
+    assert hint is not None and hint.message.startswith(seen + "; the model's shadows miss")
+    assert "those shadows, or a caster" in hint.message
+    alone = _finished_with_misfits([limit + 0.1] * 7).problem("model")
+    assert alone is not None and alone.message.startswith("the model's shadows miss")
+    assert "those shadows" not in alone.message
+
+
 def test_the_thesis_method_measures_no_model_misfit():
     track = _finished_with_misfits([0.5] * 5, method="thesis")
     assert "model_misfit" not in track.extra and track.problem("model") is None
