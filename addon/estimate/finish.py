@@ -144,18 +144,18 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     if model_off:
         # Shadows the model does not cast (notes.note_unmodelled_shadows,
         # reported before this) also leave the model's shadows missing the
-        # footage's: that hint is kept, and named as a cause.
+        # footage's: that hint is kept, as a cause.
         unmodelled = track.problem("model")
-        cause = ("those shadows, or a caster or the camera off in the model, bias"
-                 if unmodelled is not None else
-                 "a caster or the camera is off in the model, which biases")
+        cause = ("a caster or the camera is off in the model, which biases every "
+                 "frame's Sun" if unmodelled is None else
+                 "a caster or the camera off in the model, or shadows it does not "
+                 f"cast, bias every frame's Sun ({unmodelled.message})")
         track.report("model", trackfile.ProblemKind.HINT,
-                     ("" if unmodelled is None else unmodelled.message + "; ")
-                     + f"the model's shadows miss the footage's: on a typical frame "
+                     f"the model's shadows miss the footage's: on a typical frame "
                      f"{misfit:.0%} of the pixels by their edges are lit where the model "
                      f"shades them or the other way round, whatever the Sun (a true model "
-                     f"leaves under {calibration.MODEL_MISFIT_MAX:.0%}); {cause} every "
-                     f"frame's Sun. Check the casters' places and sizes against the footage"
+                     f"leaves under {calibration.MODEL_MISFIT_MAX:.0%}); {cause}. Check "
+                     f"the casters' places and sizes against the footage"
                      + ("" if options.refine_model else
                         ", or let the clip refine them (Refine Model, --refine-model)"))
     seldom_measured = calibrated and calibration.clip_doubted(share)

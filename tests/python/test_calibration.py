@@ -258,7 +258,7 @@ def test_a_clip_whose_model_does_not_fit_its_footage_stays_below_one_half_and_sa
 def test_shadows_the_model_does_not_cast_stay_named_when_the_model_misfits():
     """A tree's shadow over the ground (not in the model) makes the model's
     shadows miss the footage's as a misplaced caster does: the hint about
-    those shadows, reported first, is kept and named as a cause."""
+    those shadows, reported first, is kept in the misfit's, as a cause."""
     limit = calibration.MODEL_MISFIT_MAX
     raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97, sunlight=trackfile.Sunlight.YES,
                    tracked=_Tracked(limit + 0.1)) for f in range(1, 8)]
@@ -269,11 +269,13 @@ def test_shadows_the_model_does_not_cast_stay_named_when_the_model_misfits():
     finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
                   [[r.frame for r in raws]])
     hint = track.problem("model")
-    assert hint is not None and hint.message.startswith(seen + "; the model's shadows miss")
-    assert "those shadows, or a caster" in hint.message
+    assert hint is not None and hint.message.startswith("the model's shadows miss")
+    assert f"or shadows it does not cast, bias every frame's Sun ({seen})" in hint.message
     alone = _finished_with_misfits([limit + 0.1] * 7).problem("model")
     assert alone is not None and alone.message.startswith("the model's shadows miss")
-    assert "those shadows" not in alone.message
+    assert "does not cast" not in alone.message
+    assert "a caster or the camera is off in the model, which biases every frame's Sun. " \
+        "Check" in alone.message
 
 
 def test_the_thesis_method_measures_no_model_misfit():
