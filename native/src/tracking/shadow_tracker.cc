@@ -41,9 +41,6 @@ constexpr double kPinChi2 = 25.0;
 // Neighbouring pixels whose normals differ by more than about 10 deg lie on
 // different faces.
 constexpr float kSamePlaneCos = 0.985f;
-// A face's normals share a cell this wide (deg), as the sky's planar groups
-// do (SkyEvidenceOptions::normal_bin_deg).
-constexpr double kFaceBinDeg = 12.0;
 // The walls' Sun is taken only when at least this share of their band lies
 // off the ground (ShadowTrackerOptions::surfaces_pin_deg).
 constexpr double kMinOffGroundShare = 0.2;
@@ -162,7 +159,7 @@ struct ShadowTracker::Impl {
 
   std::map<std::tuple<int, int, int>, int> faces;
   int FaceOf(int32_t object, const Eigen::Vector3f& n) {
-    const auto [zbin, abin] = NormalBin(n, kFaceBinDeg);
+    const auto [zbin, abin] = NormalBin(n, kFaceNormalBinDeg);
     const auto it = faces.emplace(std::make_tuple(int(object), zbin, abin),
                                   static_cast<int>(faces.size()));
     if (it.second) face_on_ground.push_back(IsGround(object));

@@ -63,6 +63,10 @@ inline double AngleBetweenDeg(const Eigen::Vector3d& a,
   return std::atan2(a.cross(b).norm(), a.dot(b)) / kRadPerDeg;
 }
 
+// The width of a planar face's normal cell (NormalBin), degrees: the sky's
+// planar groups (SkyEvidenceOptions::normal_bin_deg) and the tracker's faces.
+constexpr double kFaceNormalBinDeg = 12.0;
+
 // A surface normal's cell, bin_deg wide in zenith and in azimuth (one cell
 // about the zenith): the faces of a model that share one cell and one
 // object are one plane, lit alike by the Sun.

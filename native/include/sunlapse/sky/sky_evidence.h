@@ -34,6 +34,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "sunlapse/common/angles.h"
 #include "sunlapse/scene/camera.h"
 #include "sunlapse/scene/scene.h"
 
@@ -84,7 +85,7 @@ struct SkyEvidenceOptions {
   int ignore_top_rows = 0;
   int ignore_bottom_rows = 0;
   // Samples are grouped into planes by object and normal within this (deg).
-  double normal_bin_deg = 12.0;
+  double normal_bin_deg = kFaceNormalBinDeg;
   // Only samples within this many grid steps of a candidate's predicted
   // shadow boundary are scored (the band); the boundary itself is step 0.
   int band_steps = 2;
