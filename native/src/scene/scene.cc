@@ -5,9 +5,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -89,6 +91,9 @@ struct Scene::Impl {
   std::vector<int32_t> triangles;
   int64_t num_vertices = 0;
   Eigen::AlignedBox3f bounds;
+  // Bounding boxes of the objects (of the whole model when there are many),
+  // for OpenSkyAbove.
+  std::vector<Eigen::AlignedBox3f> boxes;
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -150,6 +155,31 @@ Eigen::Vector3f Hits::point(int64_t i) const {
 Eigen::Vector3f Hits::normal(int64_t i) const {
   return Eigen::Vector3f(&normal_in_world[3 * i]);
 }
+
+namespace {
+// Each object's bounding box; a model of more objects than OpenSkyAbove
+// should test against, per point, is bounded by its own box alone (merging
+// boxes is no better: a wide ground merged with anything standing on it
+// bounds every point by that thing's height).
+std::vector<Eigen::AlignedBox3f> ObjectBoxes(
+    const std::vector<float>& vertices, const std::vector<int32_t>& triangles,
+    const std::vector<int32_t>& object_ids, const Eigen::AlignedBox3f& bounds) {
+  constexpr size_t kMaxBoxes = 256;
+  std::map<int32_t, Eigen::AlignedBox3f> by_object;
+  for (size_t t = 0; t < object_ids.size(); ++t) {
+    Eigen::AlignedBox3f& box = by_object[object_ids[t]];
+    for (int k = 0; k < 3; ++k) {
+      const float* v =
+          vertices.data() + 3 * static_cast<size_t>(triangles[3 * t + k]);
+      box.extend(Eigen::Vector3f(v[0], v[1], v[2]));
+    }
+    if (by_object.size() > kMaxBoxes) return {bounds};
+  }
+  std::vector<Eigen::AlignedBox3f> boxes;
+  for (const auto& [id, box] : by_object) boxes.push_back(box);
+  return boxes;
+}
+}  // namespace
 
 Scene::Scene(const float* vertices, int64_t num_vertices,
              const int32_t* triangles, int64_t num_triangles,
@@ -218,6 +248,7 @@ Scene::Scene(const float* vertices, int64_t num_vertices,
   s.triangles.assign(triangles, triangles + 3 * num_triangles);
   s.num_vertices = num_vertices;
   s.bounds = bounds;
+  s.boxes = ObjectBoxes(s.vertices, s.triangles, s.object_ids, bounds);
 }
 
 namespace {
@@ -260,6 +291,22 @@ Eigen::AlignedBox3f Scene::bounds() const { return impl_->bounds; }
 
 float Scene::surface_offset() const {
   return 1e-3f + 1e-5f * impl_->bounds.diagonal().norm();
+}
+
+float Scene::OpenSkyAbove(const Eigen::Vector3f& point) const {
+  double steepest = -std::numeric_limits<double>::infinity();  // a tangent
+  for (const Eigen::AlignedBox3f& box : impl_->boxes) {
+    const double rise = double(box.max().z()) - point.z();
+    if (rise <= 0) continue;
+    const double dx =
+        std::max({box.min().x() - point.x(), 0.f, point.x() - box.max().x()});
+    const double dy =
+        std::max({box.min().y() - point.y(), 0.f, point.y() - box.max().y()});
+    const double run = std::hypot(dx, dy);
+    if (!(run > 0)) return static_cast<float>(M_PI / 2);
+    steepest = std::max(steepest, rise / run);
+  }
+  return static_cast<float>(std::min(M_PI / 2, std::atan(steepest) + 1e-4));
 }
 int32_t Scene::object_id_of_triangle(int64_t t) const {
   return impl_->object_ids.at(t);

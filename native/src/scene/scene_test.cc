@@ -226,6 +226,98 @@ TEST(Scene, OccludedTowardASubsetIsTheSameRaysFromItsOrigins) {
   EXPECT_GT(std::count(a.begin(), a.end(), 0), 30);
 }
 
+// Adds an axis-aligned box [lo, hi] as object `id`.
+void AddBox(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int32_t id,
+            std::vector<Eigen::Vector3f>* v, std::vector<Eigen::Vector3i>* t,
+            std::vector<int32_t>* ids) {
+  const int b = static_cast<int>(v->size());
+  for (int i = 0; i < 8; ++i) {
+    v->emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(),
+                    (i & 4) ? hi.z() : lo.z());
+  }
+  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    t->emplace_back(b + q[0], b + q[1], b + q[2]);
+    t->emplace_back(b + q[0], b + q[2], b + q[3]);
+    ids->insert(ids->end(), 2, id);
+  }
+}
+
+// From points on the ground, every ray steeper than OpenSkyAbove is free,
+// even just above it and toward the nearest caster; under an overhang
+// nothing is. With few objects (their own boxes) and with many (the model's
+// box: no bound below its top, but none wrong).
+TEST(Scene, NoRaySteeperThanTheOpenSkyIsOccluded) {
+  for (const int poles : {0, 30, 300}) {
+    std::vector<Eigen::Vector3f> v = {
+        {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}};
+    std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
+    std::vector<int32_t> ids = {0, 0};
+    AddBox({-1, -1, 0}, {1, 1, 6}, 1, &v, &t, &ids);    // a tower
+    AddBox({4, -2, 3}, {8, 2, 3.2f}, 2, &v, &t, &ids);  // a floating roof
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-18, 18), h(0.5f, 4);
+    for (int k = 0; k < poles; ++k) {
+      const float x = u(rng), y = u(rng);
+      AddBox({x, y, 0}, {x + 0.1f, y + 0.1f, h(rng)}, 3 + k, &v, &t, &ids);
+    }
+    const Scene scene(v, t, ids);
+    const float kZenith = static_cast<float>(M_PI / 2);
+    std::uniform_real_distribution<float> azimuth(0, 2 * M_PI), unit(0, 1);
+    int bounded = 0, rays = 0, hits_below = 0;
+    for (int i = 0; i < 400; ++i) {
+      const Eigen::Vector3f p(u(rng), u(rng), 0.01f);
+      const float open = scene.OpenSkyAbove(p);
+      ASSERT_TRUE(open >= -kZenith && open <= kZenith) << open;
+      bounded += open < kZenith;
+      std::vector<float> origins, dirs;
+      for (int k = 0; k < 64; ++k) {
+        // Half just above the bound, half anywhere above it; and as many
+        // below it, where something may stand.
+        const float above = k % 2 ? 1e-3f : unit(rng) * (kZenith - open);
+        for (const float e : {open + above, open - 0.02f - above}) {
+          if (e > kZenith || e < 0) continue;
+          const float a = azimuth(rng);
+          dirs.insert(dirs.end(), {std::cos(e) * std::cos(a),
+                                   std::cos(e) * std::sin(a), std::sin(e)});
+          origins.insert(origins.end(), {p.x(), p.y(), p.z()});
+        }
+      }
+      const int64_t n = static_cast<int64_t>(dirs.size() / 3);
+      std::vector<uint8_t> occluded(n);
+      scene.Occluded(n, origins.data(), dirs.data(), 0.f, INFINITY,
+                     occluded.data());
+      for (int64_t k = 0; k < n; ++k) {
+        const bool steeper = std::asin(dirs[3 * k + 2]) > open;
+        if (steeper) {
+          ++rays;
+          EXPECT_EQ(occluded[k], 0) << "from " << p.transpose();
+        } else {
+          hits_below += occluded[k];
+        }
+      }
+    }
+    if (poles > 256) {
+      EXPECT_EQ(bounded, 0);
+      continue;
+    }
+    // The bound is not vacuous: most points see open sky above some
+    // elevation, and below it rays do meet the model.
+    EXPECT_GT(bounded, 300) << poles;
+    EXPECT_GT(rays, 10000) << poles;
+    EXPECT_GT(hits_below, 100) << poles;
+  }
+  // Under the roof, the bound is the zenith.
+  std::vector<Eigen::Vector3f> v;
+  std::vector<Eigen::Vector3i> t;
+  std::vector<int32_t> ids;
+  AddBox({4, -2, 3}, {8, 2, 3.2f}, 0, &v, &t, &ids);
+  const Scene roof(v, t, ids);
+  EXPECT_FLOAT_EQ(roof.OpenSkyAbove({6, 0, 0}), static_cast<float>(M_PI / 2));
+  EXPECT_LT(roof.OpenSkyAbove({6, 0, 4}), -1.f);  // above it: all of the sky
+}
+
 TEST(Scene, NonFiniteRaysAreMissesNotCrashes) {
   const Scene scene = BoxOnPlane();
   const float nan = NAN;

@@ -66,6 +66,11 @@ class Scene {
   // and put the Sun 0.45 deg too low on the median scene
   // (docs/accuracy.md, "The surface offset's bias").
   float surface_offset() const;
+  // The elevation (rad above the horizontal) above which nothing of the
+  // model stands as seen from `point`: a ray from it steeper than that is
+  // not occluded. Bounded from the objects' boxes (pi/2 under one), with
+  // 1e-4 rad to spare for the rays' float arithmetic.
+  float OpenSkyAbove(const Eigen::Vector3f& point) const;
   int32_t object_id_of_triangle(int64_t t) const;
   // The model's data as given (world frame).
   Eigen::Vector3f vertex(int64_t v) const;
