@@ -28,6 +28,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -60,7 +61,7 @@ class SkyGrid {
     int index;
     float angle_deg;
   };
-  const std::vector<Neighbour>& Cached(int i) const { return cached_[i]; }
+  const std::vector<Neighbour>& Cached(int i) const { return Lists()[i]; }
   double cached_radius_deg() const { return cached_radius_deg_; }
   // Index of the grid direction closest to `d`.
   int Nearest(const Eigen::Vector3d& d) const;
@@ -68,8 +69,17 @@ class SkyGrid {
  private:
   std::vector<Eigen::Vector3d> directions_;
   double spacing_deg_ = 0.0;
+  double max_zenith_deg_ = 0.0;
   double cached_radius_deg_ = 0.0;
-  std::vector<std::vector<Neighbour>> cached_;
+  // The neighbour lists are made on first use: only the path reads them, not
+  // the table or the frames' evidence (30-60 ms of a run's fixed costs).
+  // Shared by copies, as the directions are.
+  struct Lazy {
+    std::once_flag once;
+    std::vector<std::vector<Neighbour>> lists;
+  };
+  std::shared_ptr<Lazy> cached_ = std::make_shared<Lazy>();
+  const std::vector<std::vector<Neighbour>>& Lists() const;
 };
 
 struct SkyEvidenceOptions {
