@@ -17,6 +17,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 namespace sunlapse {
 namespace {
@@ -54,51 +55,56 @@ SkyGrid::SkyGrid(int num_directions, double max_zenith_deg) {
 }
 
 const std::vector<std::vector<SkyGrid::Neighbour>>& SkyGrid::Lists() const {
+  // Isolated: while it waits for its parallel loop, the first caller must not
+  // take up other work of the pool that may ask for the lists again.
   std::call_once(cached_->once, [this] {
-    std::vector<std::vector<Neighbour>>& cached = cached_->lists;
-    const int num_directions = size();
-    const double zmin = std::cos(max_zenith_deg_ * kDeg);
-    cached.resize(directions_.size());
-    const double cos_r = std::cos(cached_radius_deg_ * kDeg);
-    // About this many in the cap (fewer by the horizon): reserved, as a
-    // vector grown by doubling copies itself onto fresh pages.
-    const size_t expected = static_cast<size_t>(
-        1.2 * num_directions * (1.0 - cos_r) / (1.0 - zmin) + 8.0);
-    // The spiral runs from the zenith down (z falls with the index), and a
-    // direction within r of another is within r of it in zenith: each one
-    // scans only the indices of that zenith band (a margin keeps it a
-    // superset; the dot product decides as before).
-    const double r = cached_radius_deg_ * kDeg + 1e-6;
-    auto first_below = [&](double z) {  // the first index whose z is below
-      return static_cast<int>(
-          std::partition_point(
-              directions_.begin(), directions_.end(),
-              [z](const Eigen::Vector3d& v) { return v.z() >= z; }) -
-          directions_.begin());
-    };
-    tbb::parallel_for(0, size(), [&](int i) {
-      cached[i].reserve(expected);
-      const double zenith =
-          std::acos(std::clamp(directions_[i].z(), -1.0, 1.0));
-      const int j0 = first_below(std::cos(std::max(0.0, zenith - r)) + 1e-12);
-      const int j1 = first_below(std::cos(std::min(M_PI, zenith + r)) - 1e-12);
-      for (int j = j0; j < j1; ++j) {
-        const double c = directions_[i].dot(directions_[j]);
-        if (c >= cos_r) {
-          cached[i].push_back(
-              {j,
-               static_cast<float>(
-                   std::atan2(directions_[i].cross(directions_[j]).norm(), c) /
-                   kDeg)});
+    tbb::this_task_arena::isolate([this] {
+      std::vector<std::vector<Neighbour>>& cached = cached_->lists;
+      const int num_directions = size();
+      const double zmin = std::cos(max_zenith_deg_ * kDeg);
+      cached.resize(directions_.size());
+      const double cos_r = std::cos(cached_radius_deg_ * kDeg);
+      // About this many in the cap (fewer by the horizon): reserved, as a
+      // vector grown by doubling copies itself onto fresh pages.
+      const size_t expected = static_cast<size_t>(
+          1.2 * num_directions * (1.0 - cos_r) / (1.0 - zmin) + 8.0);
+      // The spiral runs from the zenith down (z falls with the index), and a
+      // direction within r of another is within r of it in zenith: each one
+      // scans only the indices of that zenith band (a margin keeps it a
+      // superset; the dot product decides as before).
+      const double r = cached_radius_deg_ * kDeg + 1e-6;
+      auto first_below = [&](double z) {  // the first index whose z is below
+        return static_cast<int>(
+            std::partition_point(
+                directions_.begin(), directions_.end(),
+                [z](const Eigen::Vector3d& v) { return v.z() >= z; }) -
+            directions_.begin());
+      };
+      tbb::parallel_for(0, size(), [&](int i) {
+        cached[i].reserve(expected);
+        const double zenith =
+            std::acos(std::clamp(directions_[i].z(), -1.0, 1.0));
+        const int j0 = first_below(std::cos(std::max(0.0, zenith - r)) + 1e-12);
+        const int j1 =
+            first_below(std::cos(std::min(M_PI, zenith + r)) - 1e-12);
+        for (int j = j0; j < j1; ++j) {
+          const double c = directions_[i].dot(directions_[j]);
+          if (c >= cos_r) {
+            cached[i].push_back(
+                {j, static_cast<float>(
+                        std::atan2(directions_[i].cross(directions_[j]).norm(),
+                                   c) /
+                        kDeg)});
+          }
         }
-      }
-      // Nearest first: a search within a smaller radius stops at the first
-      // neighbour beyond it.
-      std::sort(cached[i].begin(), cached[i].end(),
-                [](const Neighbour& a, const Neighbour& b) {
-                  return a.angle_deg < b.angle_deg ||
-                         (a.angle_deg == b.angle_deg && a.index < b.index);
-                });
+        // Nearest first: a search within a smaller radius stops at the first
+        // neighbour beyond it.
+        std::sort(cached[i].begin(), cached[i].end(),
+                  [](const Neighbour& a, const Neighbour& b) {
+                    return a.angle_deg < b.angle_deg ||
+                           (a.angle_deg == b.angle_deg && a.index < b.index);
+                  });
+      });
     });
   });
   return cached_->lists;

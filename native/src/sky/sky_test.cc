@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <random>
 
+#include <tbb/parallel_for.h>
+
 #include "sunlapse/common/angles.h"
 #include "sunlapse/sky/sky_evidence.h"
 #include "sunlapse/sky/sun_path.h"
@@ -78,6 +80,27 @@ TEST(SkyGrid, CachedNeighboursAreThoseOfAScanOfTheWholeSky) {
       std::sort(cached.begin(), cached.end());
       ASSERT_EQ(cached, scanned) << n << " directions, direction " << i;
     }
+  }
+}
+
+// The lists are made on first use: asked for first by many tasks at once
+// (each also copying the grid, which shares them), they are made once and
+// are a lone caller's.
+TEST(SkyGrid, NeighboursFirstAskedForByManyTasksAtOnceAreTheListsOfOneCaller) {
+  const SkyGrid alone(1200, 88.0);
+  const SkyGrid shared(1200, 88.0);
+  std::vector<std::vector<int>> seen(shared.size());
+  tbb::parallel_for(0, shared.size(), [&](int i) {
+    const SkyGrid copy = shared;
+    for (const SkyGrid::Neighbour& nb : copy.Cached(i))
+      seen[i].push_back(nb.index);
+  });
+  for (int i = 0; i < alone.size(); ++i) {
+    std::vector<int> expected;
+    for (const SkyGrid::Neighbour& nb : alone.Cached(i))
+      expected.push_back(nb.index);
+    ASSERT_EQ(seen[i], expected) << "direction " << i;
+    ASSERT_EQ(&shared.Cached(i), &SkyGrid(shared).Cached(i));
   }
 }
 
