@@ -126,7 +126,9 @@ struct ShadowTracker::Impl {
   std::vector<int> band_ground;  // per loaded band pixel: its ground index
   std::vector<int> band_face;    // and its face (all_surfaces)
   std::vector<uint8_t> occluded;
-  std::vector<float> lit_origin;  // LitOf's scratch
+  // Every ground pixel's origin, x y z: LitOf casts from it through the
+  // pixels' indices (Scene::OccludedTowardSubset), copying none.
+  std::vector<float> ground_origin;
   // Initialize's scratch over the whole ground, kept: a run initialises
   // again on every re-acquisition, and at 1080p each fresh buffer's first
   // writes (page faults) cost more than filling it.
@@ -241,8 +243,12 @@ struct ShadowTracker::Impl {
     }
     ReserveHuge(&init_fit.residual, n);
     init_fit.residual.assign(n, 0.0);
-    ReserveHuge(&lit_origin, 3 * n);
-    lit_origin.assign(3 * n, 0.f);
+    ReserveHuge(&ground_origin, 3 * n);
+    ground_origin.resize(3 * n);
+    for (size_t g = 0; g < n; ++g) {
+      for (int k = 0; k < 3; ++k)
+        ground_origin[3 * g + k] = ground[g].origin[k];
+    }
     init_near_edge.assign(n, 0);
   }
 
@@ -269,17 +275,9 @@ struct ShadowTracker::Impl {
   // Lit flags of ground indices `ids` toward d (1 lit, 0 shadow).
   std::vector<uint8_t> LitOf(const std::vector<int>& ids,
                              const Eigen::Vector3f& d) {
-    // The origins' buffer is kept: the whole ground's is megabytes, and
-    // fresh pages cost more than the copy.
-    std::vector<float>& org = lit_origin;
-    ReserveHuge(&org, 3 * ids.size());
-    org.resize(3 * ids.size());
-    for (size_t i = 0; i < ids.size(); ++i) {
-      for (int k = 0; k < 3; ++k) org[3 * i + k] = ground[ids[i]].origin[k];
-    }
     std::vector<uint8_t> occ(ids.size());
-    scene.OccludedToward(static_cast<int64_t>(ids.size()), org.data(), d, 0.f,
-                         kInf, occ.data());
+    scene.OccludedTowardSubset(static_cast<int64_t>(ids.size()), ids.data(),
+                               ground_origin.data(), d, 0.f, kInf, occ.data());
     rays_cast += static_cast<int64_t>(ids.size());
     for (auto& v : occ) v = !v;
     return occ;
