@@ -12,6 +12,24 @@
 namespace sunlapse {
 namespace {
 
+// Adds an axis-aligned box [lo, hi] as object `id`.
+void AddBox(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int32_t id,
+            std::vector<Eigen::Vector3f>* v, std::vector<Eigen::Vector3i>* t,
+            std::vector<int32_t>* ids) {
+  const int b = static_cast<int>(v->size());
+  for (int i = 0; i < 8; ++i) {
+    v->emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(),
+                    (i & 4) ? hi.z() : lo.z());
+  }
+  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    t->emplace_back(b + q[0], b + q[1], b + q[2]);
+    t->emplace_back(b + q[0], b + q[2], b + q[3]);
+    ids->insert(ids->end(), 2, id);
+  }
+}
+
 // Ground plane z = 0 over [-10, 10]^2 (object 0) and a 2 x 2 x 2 box standing
 // on it at the origin (object 1).
 Scene BoxOnPlane() {
@@ -19,19 +37,7 @@ Scene BoxOnPlane() {
       {-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}};
   std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
   std::vector<int32_t> ids = {0, 0};
-  const int b = static_cast<int>(v.size());
-  for (int i = 0; i < 8; ++i) {
-    v.emplace_back((i & 1) ? 1.f : -1.f, (i & 2) ? 1.f : -1.f,
-                   (i & 4) ? 2.f : 0.f);
-  }
-  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    t.emplace_back(b + q[0], b + q[1], b + q[2]);
-    t.emplace_back(b + q[0], b + q[2], b + q[3]);
-    ids.push_back(1);
-    ids.push_back(1);
-  }
+  AddBox({-1, -1, 0}, {1, 1, 2}, 1, &v, &t, &ids);
   return Scene(v, t, ids);
 }
 
@@ -224,24 +230,6 @@ TEST(Scene, OccludedTowardASubsetIsTheSameRaysFromItsOrigins) {
   EXPECT_EQ(a, b);
   EXPECT_GT(std::count(a.begin(), a.end(), 1), 30);
   EXPECT_GT(std::count(a.begin(), a.end(), 0), 30);
-}
-
-// Adds an axis-aligned box [lo, hi] as object `id`.
-void AddBox(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int32_t id,
-            std::vector<Eigen::Vector3f>* v, std::vector<Eigen::Vector3i>* t,
-            std::vector<int32_t>* ids) {
-  const int b = static_cast<int>(v->size());
-  for (int i = 0; i < 8; ++i) {
-    v->emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(),
-                    (i & 4) ? hi.z() : lo.z());
-  }
-  const int quads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    t->emplace_back(b + q[0], b + q[1], b + q[2]);
-    t->emplace_back(b + q[0], b + q[2], b + q[3]);
-    ids->insert(ids->end(), 2, id);
-  }
 }
 
 // From points on the ground, every ray steeper than OpenSkyAbove is free,
