@@ -28,6 +28,12 @@ from . import angles
 
 # The Sun's hour angle advances 15 deg per hour of (mean) solar time.
 DEG_PER_HOUR = 15.0
+# A fit has settled when a step moves no parameter (radians, or radians per
+# time unit) by more than this, and its robust weights change by less than
+# SETTLED_WEIGHT when refreshed: the steps left would change its Suns by
+# less than 1e-7 deg.
+SETTLED_STEP_RAD = 1e-10
+SETTLED_WEIGHT = 1e-9
 
 
 @dataclass
@@ -124,6 +130,17 @@ def _jacobian(params, t, rate, root_w):
     return np.stack([(c * root_w[:, None]).ravel() for c in columns], axis=1)
 
 
+def _damped_step(jtj: np.ndarray, jtr: np.ndarray, lam: float) -> np.ndarray:
+    """The Levenberg-Marquardt step. The damped normal matrix is positive
+    definite but for a degenerate fit; solve is a fifth of lstsq's cost,
+    which stays for those."""
+    damped = jtj + lam * np.diag(np.diag(jtj) + 1e-9)
+    try:
+        return np.linalg.solve(damped, -jtr)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(damped, -jtr, rcond=None)[0]
+
+
 def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
                azimuth_world_deg: Sequence[Optional[float]],
                weights: Optional[Sequence[float]] = None, times_are_seconds: bool = True,
@@ -194,25 +211,33 @@ def fit_circle(times: Sequence[float], zenith_deg: Sequence[Optional[float]],
     # a rejected step leaves both as they were (most of a fit's cost).
     r0: Optional[np.ndarray] = None
     jac: Optional[np.ndarray] = None
+    # Settled: the last step moved no parameter by SETTLED_STEP_RAD; the
+    # steps until the next robust weights would not move them either, so
+    # they are skipped, and the fit ends when those weights hold too.
+    settled = False
     for it in range(iterations):
-        if r0 is None:
-            r0 = residuals(params)
-        if jac is None:
-            jac = jacobian(params, r0)
-        jtj, jtr = jac.T @ jac, jac.T @ r0
-        step = np.linalg.lstsq(jtj + lam * np.diag(np.diag(jtj) + 1e-9), -jtr, rcond=None)[0]
-        trial = params + step
-        r1 = residuals(trial)
-        if float(np.sum(r1 ** 2)) < float(np.sum(r0 ** 2)):
-            params, lam = trial, lam * 0.3
-            r0, jac = r1, None
-        else:
-            lam *= 10.0
+        if not settled:
+            if r0 is None:
+                r0 = residuals(params)
+            if jac is None:
+                jac = jacobian(params, r0)
+            step = _damped_step(jac.T @ jac, jac.T @ r0, lam)
+            trial = params + step
+            r1 = residuals(trial)
+            if float(np.sum(r1 ** 2)) < float(np.sum(r0 ** 2)):
+                params, lam = trial, lam * 0.3
+                r0, jac = r1, None
+            else:
+                lam *= 10.0
+            settled = float(np.max(np.abs(step))) < SETTLED_STEP_RAD
         if it % 10 == 9:  # robust weights (Huber on the angle), refreshed now and then
             ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
             huber = 1.5 * (1.4826 * float(np.median(ang)) + 1e-3)
-            robust = np.where(ang <= huber, 1.0, huber / np.maximum(ang, 1e-12))
-            r0, jac = None, None
+            weights_now = np.where(ang <= huber, 1.0, huber / np.maximum(ang, 1e-12))
+            if settled and float(np.max(np.abs(weights_now - robust))) < SETTLED_WEIGHT:
+                break
+            robust = weights_now
+            r0, jac, settled = None, None, False
     fit_all = _model(params, t, rate)
     ang = np.degrees(np.linalg.norm(_model(params, tw, rate) - s, axis=1))
     p, _, _ = _basis(params[0], params[1])

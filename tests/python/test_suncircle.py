@@ -76,3 +76,34 @@ def test_the_analytic_jacobian_is_the_models_derivative(rate):
                             for e in np.eye(len(params))], axis=1)
         assert np.abs(jac - numeric).max() < 1e-6, pz
     assert suncircle._jacobian(np.array([0.0, 1.0, 0.2, 0.1]), t, -0.26, root_w) is None
+
+
+@pytest.mark.parametrize("seconds", [True, False])
+def test_a_settled_fit_ends_early_where_every_iteration_would_end(seconds, monkeypatch):
+    # Outliers make the robust weights matter; the fit that skips its
+    # settled steps must give the Suns that running all 60 gives.
+    hours = np.linspace(-3.0, 2.0, 60)
+    zen, az = day(37.0, 12.0, 40.0, hours)
+    rng = np.random.default_rng(7)
+    zen = [z + rng.normal(0, 0.1) + (6.0 if i % 9 == 0 else 0.0) for i, z in enumerate(zen)]
+    az = [a + rng.normal(0, 0.1) for a in az]
+    times = list(hours * 3600.0) if seconds else list(range(60))
+    steps = []
+    solve = suncircle._damped_step
+
+    def counted(*args):
+        steps.append(1)
+        return solve(*args)
+
+    monkeypatch.setattr(suncircle, "_damped_step", counted)
+    early = suncircle.fit_circle(times, zen, az, times_are_seconds=seconds)
+    early_steps = len(steps)
+    monkeypatch.setattr(suncircle, "SETTLED_STEP_RAD", 0.0)
+    steps.clear()
+    every = suncircle.fit_circle(times, zen, az, times_are_seconds=seconds)
+    assert early.success and every.success
+    assert len(steps) == 60 and early_steps < 60
+    sun = np.array(suncircle._unit(np.array(early.zenith_deg), np.array(early.azimuth_world_deg)))
+    ref = np.array(suncircle._unit(np.array(every.zenith_deg), np.array(every.azimuth_world_deg)))
+    off = np.degrees(np.arccos(np.clip(np.sum(sun * ref, axis=1), -1.0, 1.0)))
+    assert off.max() < 1e-5
