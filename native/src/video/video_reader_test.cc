@@ -7,6 +7,7 @@
 #include <sys/resource.h>
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -501,6 +502,51 @@ TEST(VideoReader, AGrayOnlyReaderGivesTheSameGrayAndRefusesColour) {
   EXPECT_THROW(gray.Read(&bgr), std::logic_error);
   EXPECT_THROW(gray.ReadGrayAndBgr(&g, cv::Size(), &bgr, cv::Size()),
                std::logic_error);
+}
+
+TEST(VideoReader, GrayReducedTwiceSkipsTheDeblockingOfBFrames) {
+  // The estimate's reads, averaged down, leave out H.264's deblocking
+  // filter on B-frames: a sixth of the decode. Key frames must come out as a
+  // full decode's; the B-frames differ, and the frames predicted from the
+  // reference B-frames a little (until the next key frame), never by much.
+  // Gray read whole, or by a colour reader, is a full decode's.
+  const fs::path d = TempDir("deblock");
+  const std::string h264 = (d / "noisy.mp4").string();
+  // Coarse quantisation over noise: block edges the filter has work on.
+  if (!Ffmpeg("-f lavfi -i testsrc2=size=160x120:rate=25,noise=alls=40:allf=t "
+              "-frames:v 24 -c:v libx264 -bf 3 -g 12 -crf 40 -pix_fmt "
+              "yuv420p " +
+              h264))
+    GTEST_SKIP() << "ffmpeg with lavfi and libx264 is not available";
+  std::string types;
+  if (FILE* p = popen(("ffprobe -v error -select_streams v -show_entries "
+                       "frame=pict_type -of csv=p=0 " +
+                       h264)
+                          .c_str(),
+                      "r")) {
+    for (int c; (c = std::fgetc(p)) != EOF;)
+      if (c == 'I' || c == 'P' || c == 'B') types += static_cast<char>(c);
+    pclose(p);
+  }
+  if (types.size() != 24) GTEST_SKIP() << "ffprobe gave no frame types";
+  ASSERT_NE(types.find('B'), std::string::npos) << types;
+  const cv::Size half(80, 60);
+  VideoReader full(h264), gray(h264, /*gray_only=*/true);
+  VideoReader full_whole(h264), gray_whole(h264, /*gray_only=*/true);
+  int b_frames_changed = 0;
+  for (int i = 0; i < 24; ++i) {
+    cv::Mat a, b, diff, a_whole, b_whole;
+    ASSERT_TRUE(full.ReadGray(&a, half));
+    ASSERT_TRUE(gray.ReadGray(&b, half));
+    cv::absdiff(a, b, diff);
+    if (types[i] == 'I') EXPECT_EQ(cv::countNonZero(diff), 0) << "frame " << i;
+    if (types[i] == 'B') b_frames_changed += cv::countNonZero(diff) > 0;
+    EXPECT_LE(cv::mean(diff)[0], 2.0) << "frame " << i << " " << types;
+    ASSERT_TRUE(full_whole.ReadGray(&a_whole));
+    ASSERT_TRUE(gray_whole.ReadGray(&b_whole));
+    EXPECT_EQ(cv::norm(a_whole, b_whole, cv::NORM_INF), 0.0) << "frame " << i;
+  }
+  EXPECT_GT(b_frames_changed, 0) << types;
 }
 
 TEST(VideoReader, SaysWhetherItsFramesDecodeOnTheirOwn) {

@@ -50,7 +50,10 @@ class VideoReader {
   // `gray_only`: the reader will only be asked for gray (ReadGray); a
   // movie's decoder may then skip the colour planes (FFmpeg's ProRes
   // decoder does: a third of its time), and Read / ReadGrayAndBgr throw
-  // std::logic_error.
+  // std::logic_error. Its gray asked for at half the size or less each way
+  // skips B-frames' deblocking filter (H.264, HEVC): that gray, and the
+  // gray of frames predicted from them, differs from a full decode's by a
+  // few levels; key frames' not at all.
   explicit VideoReader(const std::string& path, bool gray_only = false);
   ~VideoReader();
   VideoReader(const VideoReader&) = delete;
