@@ -52,6 +52,7 @@ void BindSky(py::module_& m) {
                      &SunPathOptions::prior_tolerance_deg)
       .def_readwrite("prior_weight", &SunPathOptions::prior_weight)
       .def_readwrite("prior_max_cost", &SunPathOptions::prior_max_cost)
+      .def_readwrite("keep_forward_mb", &SunPathOptions::keep_forward_mb)
       .def("check", &SunPathOptions::Check);
 
   py::enum_<FrameEvidence::Status>(m, "FrameEvidenceStatus")

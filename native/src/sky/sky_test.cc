@@ -245,9 +245,10 @@ TEST(SunPath, ALoopedClipJumpsOnceAndStaysRightOnBothSides) {
   EXPECT_TRUE(path.jump_before[n]);
 }
 
-// Longer than the solver's blocks of frames (it keeps its forward costs only
-// at block starts): jumps on a block's first frame and inside blocks are
-// found alike, and every frame stays right.
+// Longer than the solver's blocks of frames (without keep_forward_mb it
+// keeps its forward costs only at block starts): jumps on a block's first
+// frame and inside blocks are found alike, and every frame stays right;
+// with the forward pass kept whole, the same path to the bit.
 TEST(SunPath, ALongClipLoopedFiveTimesJumpsAtEveryLoop) {
   const int n = 32, loops = 5;
   Clip clip(n);
@@ -258,13 +259,31 @@ TEST(SunPath, ALongClipLoopedFiveTimesJumpsAtEveryLoop) {
     for (int f = 0; f < n; ++f)
       ev.AddFrame(clip.frames[f]), truth.push_back(clip.truth[f]);
   }
-  const SunPathResult path = SolveSunPath(ev, {}, {}, SunPathOptions());
-  ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
-  for (int t = 0; t < n * loops; ++t) {
-    EXPECT_LT(PathError(ev, path, truth, t), kPathToleranceDeg)
-        << "frame " << t;
-    EXPECT_EQ(path.jump_before[t] != 0, t > 0 && t % n == 0) << "frame " << t;
-    EXPECT_GT(path.path_margin[t], 0.f) << "frame " << t;
+  SunPathOptions blocks;
+  blocks.keep_forward_mb = 0;
+  // Half the frames under a prior a few degrees off the truth, so that the
+  // costs differ along the clip.
+  std::vector<Eigen::Vector3d> prior(truth.size(), Eigen::Vector3d::Zero());
+  for (size_t t = 0; t < truth.size(); t += 2)
+    prior[t] = (truth[t] + Eigen::Vector3d(0.05, 0, 0)).normalized();
+  for (const auto& with_prior : {std::vector<Eigen::Vector3d>(), prior}) {
+    const SunPathResult path = SolveSunPath(ev, {}, {}, blocks, with_prior);
+    const SunPathResult whole =
+        SolveSunPath(ev, {}, {}, SunPathOptions(), with_prior);
+    ASSERT_EQ(path.status, SunPathResult::Status::kSuccess);
+    ASSERT_EQ(whole.status, SunPathResult::Status::kSuccess);
+    EXPECT_EQ(whole.cost, path.cost);
+    for (int t = 0; t < n * loops; ++t) {
+      EXPECT_LT(PathError(ev, path, truth, t), kPathToleranceDeg)
+          << "frame " << t;
+      EXPECT_EQ(path.jump_before[t] != 0, t > 0 && t % n == 0) << "frame " << t;
+      EXPECT_GT(path.path_margin[t], 0.f) << "frame " << t;
+      EXPECT_EQ(whole.direction[t], path.direction[t]) << "frame " << t;
+      EXPECT_EQ(whole.jump_before[t], path.jump_before[t]) << "frame " << t;
+      EXPECT_EQ(whole.path_margin[t], path.path_margin[t]) << "frame " << t;
+      EXPECT_EQ(whole.margin[t], path.margin[t]) << "frame " << t;
+      EXPECT_EQ(whole.measured[t], path.measured[t]) << "frame " << t;
+    }
   }
 }
 

@@ -39,6 +39,8 @@ void SunPathOptions::Check() const {
           "prior_weight must be >= 0");
   Require(prior_max_cost >= 0 && std::isfinite(prior_max_cost),
           "prior_max_cost must be >= 0");
+  Require(keep_forward_mb >= 0 && std::isfinite(keep_forward_mb),
+          "keep_forward_mb must be >= 0");
 }
 
 SunPathResult SolveSunPath(const SkyEvidence& evidence,
@@ -237,20 +239,31 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   };
 
   // Forward: alpha[t][d], the best path's cost over frames 0..t ending at d.
-  // Memory stays flat in the clip's length: alpha is kept only every
-  // kBlock frames (checkpoints); the backtrack and the backward pass then
-  // run block by block from the end, each block's alpha and back-pointers
+  // Kept whole, with the back-pointers, when they fit in keep_forward_mb;
+  // else memory stays flat in the clip's length: alpha is kept only every
+  // kBlock frames (checkpoints), and the backtrack and the backward pass run
+  // block by block from the end, each block's alpha and back-pointers
   // computed again from its checkpoint (one more forward pass in all).
-  constexpr int kBlock = 64;
+  const double whole_mb = static_cast<double>(T) * D *
+                          (sizeof(float) + sizeof(int) + sizeof(uint8_t)) / 1e6;
+  const bool keep_whole = whole_mb <= o.keep_forward_mb;
+  const int kBlock = keep_whole ? T : 64;
   const int blocks = (T + kBlock - 1) / kBlock;
   std::vector<double> checkpoint(static_cast<size_t>(blocks) * D);
   std::vector<double> cost(D), next(D);
+  std::vector<float> alpha(static_cast<size_t>(kBlock) * D);
+  std::vector<int> back(static_cast<size_t>(kBlock) * D, -1);
+  std::vector<uint8_t> jumped(static_cast<size_t>(kBlock) * D, 0);
   for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
+  if (keep_whole) std::copy(cost.begin(), cost.end(), alpha.begin());
   for (int t = 0; t < T; ++t) {
     if (t > 0) {
-      relax(cost, t, &next, nullptr, nullptr);
+      const size_t row = static_cast<size_t>(t) * D;
+      relax(cost, t, &next, keep_whole ? &back[row] : nullptr,
+            keep_whole ? &jumped[row] : nullptr);
       for (int d = 0; d < D; ++d) next[d] += o.evidence_weight * cost_of(t, d);
       std::swap(cost, next);
+      if (keep_whole) std::copy(cost.begin(), cost.end(), alpha.begin() + row);
     }
     if (t % kBlock == 0) {
       std::copy(cost.begin(), cost.end(),
@@ -268,23 +281,23 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       std::max(o.rival_exclusion_deg, 2.5 * grid.spacing_deg());
   const double cos_x = std::cos(exclusion * kDeg);
   std::vector<double> beta(D, 0.0), ahead(D), beta_next(D);
-  std::vector<float> alpha(static_cast<size_t>(kBlock) * D);
-  std::vector<int> back(static_cast<size_t>(kBlock) * D, -1);
-  std::vector<uint8_t> jumped(static_cast<size_t>(kBlock) * D, 0);
   int d = d_end;
   for (int b = blocks - 1; b >= 0; --b) {
     const int t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
-    // The block's alpha and back-pointers again, from its checkpoint.
-    for (int dd = 0; dd < D; ++dd)
-      cost[dd] = checkpoint[static_cast<size_t>(b) * D + dd];
-    std::copy(cost.begin(), cost.end(), alpha.begin());
-    for (int t = t0 + 1; t < t1; ++t) {
-      const size_t row = static_cast<size_t>(t - t0) * D;
-      relax(cost, t, &next, &back[row], &jumped[row]);
+    // The block's alpha and back-pointers again, from its checkpoint (kept
+    // whole, the clip is one block and they are there already).
+    if (!keep_whole) {
       for (int dd = 0; dd < D; ++dd)
-        next[dd] += o.evidence_weight * cost_of(t, dd);
-      std::swap(cost, next);
-      std::copy(cost.begin(), cost.end(), alpha.begin() + row);
+        cost[dd] = checkpoint[static_cast<size_t>(b) * D + dd];
+      std::copy(cost.begin(), cost.end(), alpha.begin());
+      for (int t = t0 + 1; t < t1; ++t) {
+        const size_t row = static_cast<size_t>(t - t0) * D;
+        relax(cost, t, &next, &back[row], &jumped[row]);
+        for (int dd = 0; dd < D; ++dd)
+          next[dd] += o.evidence_weight * cost_of(t, dd);
+        std::swap(cost, next);
+        std::copy(cost.begin(), cost.end(), alpha.begin() + row);
+      }
     }
     // Into the next block's first frame: its back-pointers come from this
     // block's last alpha (now in `cost`).

@@ -49,6 +49,13 @@ struct SunPathOptions {
   double prior_tolerance_deg = 2.0;
   double prior_weight = 1.0;
   double prior_max_cost = 25.0;
+  // The forward pass's costs and back-pointers (9 bytes a frame and
+  // direction) are kept for the whole clip when they take at most this many
+  // MB: the backtrack then reads them, a third of a solve saved. Beyond, the
+  // pass keeps a checkpoint every 64 frames and recomputes each block from
+  // it on the way back, so that memory stays flat in the clip's length. The
+  // path is the same either way. 0: always checkpoints.
+  double keep_forward_mb = 32.0;
 
   void Check() const;
 };
