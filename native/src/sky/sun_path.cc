@@ -14,6 +14,8 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Frames between the forward pass's checkpoints when it is not kept whole.
+constexpr int kCheckpointFrames = 64;
 
 }  // namespace
 
@@ -241,19 +243,19 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   // Forward: alpha[t][d], the best path's cost over frames 0..t ending at d.
   // Kept whole, with the back-pointers, when they fit in keep_forward_mb;
   // else memory stays flat in the clip's length: alpha is kept only every
-  // kBlock frames (checkpoints), and the backtrack and the backward pass run
+  // kCheckpointFrames frames, and the backtrack and the backward pass run
   // block by block from the end, each block's alpha and back-pointers
   // computed again from its checkpoint (one more forward pass in all).
   const double whole_mb = static_cast<double>(T) * D *
                           (sizeof(float) + sizeof(int) + sizeof(uint8_t)) / 1e6;
   const bool keep_whole = whole_mb <= o.keep_forward_mb;
-  const int kBlock = keep_whole ? T : 64;
-  const int blocks = (T + kBlock - 1) / kBlock;
+  const int block_frames = keep_whole ? T : kCheckpointFrames;
+  const int blocks = (T + block_frames - 1) / block_frames;
   std::vector<double> checkpoint(static_cast<size_t>(blocks) * D);
   std::vector<double> cost(D), next(D);
-  std::vector<float> alpha(static_cast<size_t>(kBlock) * D);
-  std::vector<int> back(static_cast<size_t>(kBlock) * D, -1);
-  std::vector<uint8_t> jumped(static_cast<size_t>(kBlock) * D, 0);
+  std::vector<float> alpha(static_cast<size_t>(block_frames) * D);
+  std::vector<int> back(static_cast<size_t>(block_frames) * D, -1);
+  std::vector<uint8_t> jumped(static_cast<size_t>(block_frames) * D, 0);
   for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
   if (keep_whole) std::copy(cost.begin(), cost.end(), alpha.begin());
   for (int t = 0; t < T; ++t) {
@@ -265,9 +267,9 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       std::swap(cost, next);
       if (keep_whole) std::copy(cost.begin(), cost.end(), alpha.begin() + row);
     }
-    if (t % kBlock == 0) {
+    if (t % block_frames == 0) {
       std::copy(cost.begin(), cost.end(),
-                checkpoint.begin() + static_cast<size_t>(t / kBlock) * D);
+                checkpoint.begin() + static_cast<size_t>(t / block_frames) * D);
     }
   }
   int d_end = static_cast<int>(std::min_element(cost.begin(), cost.end()) -
@@ -283,7 +285,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   std::vector<double> beta(D, 0.0), ahead(D), beta_next(D);
   int d = d_end;
   for (int b = blocks - 1; b >= 0; --b) {
-    const int t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
+    const int t0 = b * block_frames, t1 = std::min(T, t0 + block_frames);
     // The block's alpha and back-pointers again, from its checkpoint (kept
     // whole, the clip is one block and they are there already).
     if (!keep_whole) {
