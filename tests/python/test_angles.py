@@ -8,7 +8,7 @@ import pytest
 from core.angles import (angle_between_deg, angles_from_sun_in_world, cross,
                          azimuth_geographic_from_world, azimuth_world_from_geographic,
                          sun_in_world_from_angles, sun_in_world_from_geographic,
-                         wrap_azimuth_deg)
+                         wrap_azimuth_deg, wrap_signed_deg)
 
 
 @pytest.mark.parametrize("zenith, azimuth, expected", [
@@ -39,6 +39,21 @@ def test_angles_invert_the_vector_at_any_length_for_scalars_and_arrays():
     z1, a1 = angles_from_sun_in_world(list(v[3, 4]))
     assert isinstance(z1, float) and isinstance(a1, float)
     assert math.isclose(z1, zen[3, 4]) and math.isclose(a1, azi[3, 4])
+
+
+def test_one_vector_reads_as_the_same_vector_in_an_array():
+    # One vector takes a plain-float path; it must agree with the arrays'.
+    rng = np.random.default_rng(3)
+    vectors = list(rng.normal(size=(500, 3)) * rng.uniform(1e-3, 1e3, size=(500, 1)))
+    vectors += [np.array(v, dtype=float) for v in
+                ([0, 0, 1], [0, 0, -1], [-1e-17, 1, 0], [0, 1e-300, 0], [1, 0, 0])]
+    for v in vectors:
+        z1, a1 = angles_from_sun_in_world(v)
+        z, a = angles_from_sun_in_world(v[None, :])
+        assert abs(z1 - z[0]) < 1e-12
+        assert abs(float(wrap_signed_deg(a1 - a[0]))) < 1e-12
+        assert 0.0 <= a1 < 360.0
+    assert angles_from_sun_in_world([0.0, 0.0, 0.0]) == (90.0, 0.0)
 
 
 def test_azimuth_stays_in_zero_to_360():
