@@ -39,7 +39,8 @@ O OptionsFrom(const O& base, const py::kwargs& kwargs) {
   if (kwargs.empty()) return base;
   py::object obj = py::cast(base, py::return_value_policy::copy);
   const std::vector<std::string>& names = OptionFieldNames<O>();
-  const std::string type_name = py::str(obj.get_type().attr("__name__"));
+  const std::string type_name =
+      py::str(py::type::handle_of(obj).attr("__name__"));
   for (const auto& item : kwargs) {
     const std::string key = py::str(item.first);
     if (std::find(names.begin(), names.end(), key) == names.end()) {
@@ -54,9 +55,10 @@ O OptionsFrom(const O& base, const py::kwargs& kwargs) {
       const py::object current = obj.attr(item.first);
       throw py::type_error(
           key + ": expected " +
-          std::string(py::str(current.get_type().attr("__name__"))) +
+          std::string(py::str(py::type::handle_of(current).attr("__name__"))) +
           " like its default " + std::string(py::repr(current)) + ", got " +
-          std::string(py::str(item.second.get_type().attr("__name__"))));
+          std::string(
+              py::str(py::type::handle_of(item.second).attr("__name__"))));
     }
   }
   return obj.cast<O>();
@@ -83,7 +85,7 @@ class OptionsClass : public py::class_<O> {
         "check", [](const O& o) { o.Check(); },
         "Raises ValueError naming the first bad field.");
     this->def("__repr__", [](const py::object& self) {
-      std::string out = py::str(self.get_type().attr("__name__"));
+      std::string out = py::str(py::type::handle_of(self).attr("__name__"));
       out += "(";
       bool first = true;
       for (const std::string& name : OptionFieldNames<O>()) {
