@@ -8,52 +8,77 @@
 
 #include "arrays.h"
 #include "images.h"
+#include "options.h"
 #include "sunlapse/sky/sky_evidence.h"
 #include "sunlapse/sky/sun_path.h"
 
 namespace sunlapse::python {
 
 void BindSky(py::module_& m) {
-  py::class_<SkyEvidenceOptions>(m, "SkyEvidenceOptions",
-                                 "Options of SkyEvidence (sky_evidence.h).")
-      .def(py::init<>())
-      .def_readwrite("num_directions", &SkyEvidenceOptions::num_directions)
-      .def_readwrite("max_zenith_deg", &SkyEvidenceOptions::max_zenith_deg)
-      .def_readwrite("max_samples", &SkyEvidenceOptions::max_samples)
-      .def_readwrite("ignore_top_rows", &SkyEvidenceOptions::ignore_top_rows)
-      .def_readwrite("ignore_bottom_rows",
-                     &SkyEvidenceOptions::ignore_bottom_rows)
-      .def_readwrite("normal_bin_deg", &SkyEvidenceOptions::normal_bin_deg)
-      .def_readwrite("min_side_samples", &SkyEvidenceOptions::min_side_samples)
-      .def_readwrite("band_steps", &SkyEvidenceOptions::band_steps)
-      .def_readwrite("max_ratio", &SkyEvidenceOptions::max_ratio)
-      .def_readwrite("reference_quantile",
-                     &SkyEvidenceOptions::reference_quantile)
-      .def_readwrite("rival_exclusion_deg",
-                     &SkyEvidenceOptions::rival_exclusion_deg)
-      .def_readwrite("samples_per_observation",
-                     &SkyEvidenceOptions::samples_per_observation)
-      .def("check", &SkyEvidenceOptions::Check);
+  OptionsClass<SkyEvidenceOptions>(m, "SkyEvidenceOptions",
+                                   "Options of SkyEvidence (sky_evidence.h).")
+      .field("num_directions", &SkyEvidenceOptions::num_directions,
+             "Sky directions scored per frame.")
+      .field("max_zenith_deg", &SkyEvidenceOptions::max_zenith_deg,
+             "Directions lower than this are not candidates, degrees from "
+             "the zenith.")
+      .field("max_samples", &SkyEvidenceOptions::max_samples,
+             "Surface samples at most (at most 65,535).")
+      .field("ignore_top_rows", &SkyEvidenceOptions::ignore_top_rows,
+             "Rows at the top that are not scene content.")
+      .field("ignore_bottom_rows", &SkyEvidenceOptions::ignore_bottom_rows,
+             "Rows at the bottom that are not scene content.")
+      .field("normal_bin_deg", &SkyEvidenceOptions::normal_bin_deg,
+             "Samples grouped into planes by object and normal within this, "
+             "degrees.")
+      .field("band_steps", &SkyEvidenceOptions::band_steps,
+             "Grid steps from a candidate's shadow boundary that are scored.")
+      .field("min_side_samples", &SkyEvidenceOptions::min_side_samples,
+             "Band samples a group needs on each side of a split to score.")
+      .field("max_ratio", &SkyEvidenceOptions::max_ratio,
+             "Intensity / reference ratios clipped to [0, max_ratio].")
+      .field("reference_quantile", &SkyEvidenceOptions::reference_quantile,
+             "A sample's reference level: this quantile over the reference "
+             "frames.")
+      .field("rival_exclusion_deg", &SkyEvidenceOptions::rival_exclusion_deg,
+             "Directions within this of the best are not its rivals, "
+             "degrees.")
+      .field("samples_per_observation",
+             &SkyEvidenceOptions::samples_per_observation,
+             "Neighbouring samples counted as one observation in the costs.")
+      .field("min_significance", &SkyEvidenceOptions::min_significance,
+             "A frame has evidence when its best direction beats no shadows "
+             "by this much (log-likelihood).");
 
-  py::class_<SunPathOptions>(m, "SunPathOptions",
-                             "Options of solve_sun_path (sun_path.h).")
-      .def(py::init<>())
-      .def_readwrite("evidence_weight", &SunPathOptions::evidence_weight)
-      .def_readwrite("step_weight", &SunPathOptions::step_weight)
-      .def_readwrite("jump_cost", &SunPathOptions::jump_cost)
-      .def_readwrite("max_step_deg", &SunPathOptions::max_step_deg)
-      .def_readwrite("max_speed_deg_per_hour",
-                     &SunPathOptions::max_speed_deg_per_hour)
-      .def_readwrite("min_significance", &SunPathOptions::min_significance)
-      .def_readwrite("min_margin", &SunPathOptions::min_margin)
-      .def_readwrite("rival_exclusion_deg",
-                     &SunPathOptions::rival_exclusion_deg)
-      .def_readwrite("prior_tolerance_deg",
-                     &SunPathOptions::prior_tolerance_deg)
-      .def_readwrite("prior_weight", &SunPathOptions::prior_weight)
-      .def_readwrite("prior_max_cost", &SunPathOptions::prior_max_cost)
-      .def_readwrite("keep_forward_mb", &SunPathOptions::keep_forward_mb)
-      .def("check", &SunPathOptions::Check);
+  OptionsClass<SunPathOptions>(m, "SunPathOptions",
+                               "Options of solve_sun_path (sun_path.h).")
+      .field("evidence_weight", &SunPathOptions::evidence_weight,
+             "Weight of the evidence's costs.")
+      .field("step_weight", &SunPathOptions::step_weight,
+             "Cost of a step of the whole allowed radius (grows with its "
+             "square).")
+      .field("jump_cost", &SunPathOptions::jump_cost,
+             "Cost of a jump beyond the allowed radius; negative: no jumps.")
+      .field("max_step_deg", &SunPathOptions::max_step_deg,
+             "Largest Sun motion a frame without times, degrees.")
+      .field("max_speed_deg_per_hour", &SunPathOptions::max_speed_deg_per_hour,
+             "The Sun's apparent speed bound with times, degrees an hour.")
+      .field("min_significance", &SunPathOptions::min_significance,
+             "A measured frame's evidence beats no shadows by this much.")
+      .field("min_margin", &SunPathOptions::min_margin,
+             "A measured frame's direction leads its rivals by this much.")
+      .field("rival_exclusion_deg", &SunPathOptions::rival_exclusion_deg,
+             "Directions within this of the chosen one are not its rivals, "
+             "degrees.")
+      .field("prior_tolerance_deg", &SunPathOptions::prior_tolerance_deg,
+             "Free distance from a frame's prior direction, degrees.")
+      .field("prior_weight", &SunPathOptions::prior_weight,
+             "Prior cost per squared degree beyond the tolerance.")
+      .field("prior_max_cost", &SunPathOptions::prior_max_cost,
+             "The prior's cost at most.")
+      .field("keep_forward_mb", &SunPathOptions::keep_forward_mb,
+             "The forward pass kept whole up to this many MB; beyond, "
+             "checkpoints (the same path).");
 
   py::enum_<FrameEvidence::Status>(m, "FrameEvidenceStatus")
       .value("OK", FrameEvidence::Status::kOk)

@@ -99,3 +99,19 @@ def test_stage_results_are_classes_with_a_status_enum_not_dicts():
     assert native.estimate_initial_sun(scene, cam, gray).status != \
         native.InitialSunStatus.CANCELLED
     assert {"SUCCESS", "NO_EVIDENCE"} <= set(native.SunPathStatus.__members__)
+
+
+def test_the_sky_stages_options_are_options_classes_too():
+    # Every field of SkyEvidenceOptions (sky_evidence.h) is bound,
+    # min_significance included, and both take keywords and name bad ones.
+    sky = native.SkyEvidenceOptions(min_significance=2.5, num_directions=1200)
+    assert (sky.min_significance, sky.num_directions, sky.band_steps) == (2.5, 1200, 2)
+    assert "min_significance=2.5" in repr(sky)
+    path = native.SunPathOptions(jump_cost=-1.0)
+    assert path.jump_cost == -1.0 and path.max_step_deg == 12.0
+    with pytest.raises(TypeError, match="'bogus'; valid: evidence_weight, step_weight"):
+        native.SunPathOptions(bogus=1)
+    with pytest.raises(TypeError, match="num_directions: expected int"):
+        native.SkyEvidenceOptions(num_directions="many")
+    with pytest.raises(ValueError, match="min_significance"):
+        native.SkyEvidenceOptions(min_significance=-1.0).check()
