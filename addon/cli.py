@@ -34,6 +34,7 @@ import math
 import os
 import signal
 import sys
+import tempfile
 
 from .estimate import options as estimate_options
 
@@ -194,9 +195,14 @@ def check_flags(args):
         folder = os.path.abspath(args.render_ar)
         if os.path.exists(folder) and not os.path.isdir(folder):
             fail(EXIT_USAGE, f"--render-ar {args.render_ar} is a file; give a folder")
-        parent = folder if os.path.isdir(folder) else os.path.dirname(folder)
-        if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK):
+        parent = folder
+        while not os.path.exists(parent) and os.path.dirname(parent) != parent:
+            parent = os.path.dirname(parent)  # where the renders' folder will be made
+        if not os.path.isdir(parent):
+            fail(EXIT_USAGE, f"--render-ar {args.render_ar}: {parent} is a file, not a folder")
+        if not os.access(parent, os.W_OK | os.X_OK):
             fail(EXIT_USAGE, f"--render-ar {args.render_ar}: cannot write in {parent}")
+        probe_writable("--render-ar", args.render_ar, parent)
     if args.save is not None and _same(args.out, args.save):
         fail(EXIT_USAGE, f"--out and --save are the same file {args.out}")
 
@@ -215,6 +221,28 @@ def check_output(flag, path):
         fail(EXIT_USAGE, f"{flag} {path}: the folder {folder} is not writable")
     if os.path.exists(full) and not os.access(full, os.W_OK):
         fail(EXIT_USAGE, f"{flag} {path} is read-only")
+    probe_writable(flag, path, folder)
+
+
+def probe_writable(flag, path, folder):
+    """Creates and removes a file in `folder`: what the permission bits do
+    not say (a read-only mount, /proc, a full quota; root passes every
+    access check) is found before the estimate runs, not after it."""
+    try:
+        handle, probe = tempfile.mkstemp(prefix=".sunlapse-probe-", dir=folder)
+    except OSError as e:
+        fail(EXIT_USAGE, f"{flag} {path}: cannot write in the folder {folder} ({_reason(e)})")
+    os.close(handle)
+    try:
+        os.remove(probe)
+    except OSError:
+        pass
+
+
+def _reason(e):
+    """An OS or Blender error as a short phrase (no trailing newline)."""
+    text = getattr(e, "strerror", None) or str(e)
+    return " ".join(text.split())
 
 
 def _same(a, b):
@@ -459,23 +487,26 @@ def _run(argv, interrupt):
             print(f"sunlapse: {ar.setup(context)}")
         except (gather.SceneError, ValueError) as e:
             fail(EXIT_SCENE, str(e))
-        os.makedirs(args.render_ar, exist_ok=True)
-        ar.render_frames(context, os.path.abspath(args.render_ar), frames)
+        try:
+            os.makedirs(args.render_ar, exist_ok=True)
+            ar.render_frames(context, os.path.abspath(args.render_ar), frames)
+        except (OSError, RuntimeError) as e:
+            fail(EXIT_USAGE, f"--render-ar {args.render_ar}: cannot write the renders there "
+                             f"({_reason(e)})")
         print(f"sunlapse: rendered AR frames {frames[0]}-{frames[1]} to {args.render_ar}")
     if args.save:
         interrupt.check()
         try:
             save_blend_atomically(args.save)
         except (OSError, RuntimeError) as e:
-            fail(EXIT_USAGE, f"--save {args.save}: cannot save the .blend there ({e})")
+            fail(EXIT_USAGE, f"--save {args.save}: cannot save the .blend there ({_reason(e)})")
         print(f"sunlapse: saved {args.save}")
     # The track file last: it exists only when everything above succeeded.
     interrupt.check()
     try:
         trackfile.write_track(args.out, track)
     except OSError as e:
-        fail(EXIT_USAGE, f"--out {args.out}: cannot write the track file there "
-                         f"({e.strerror or e})")
+        fail(EXIT_USAGE, f"--out {args.out}: cannot write the track file there ({_reason(e)})")
     print(f"sunlapse: wrote {args.out}")
 
 

@@ -124,6 +124,29 @@ def test_out_in_a_read_only_folder_is_refused(blend, tmp_path, capsys):
         folder.chmod(0o755)
 
 
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+@pytest.mark.parametrize("flag", ["--out", "--save", "--render-ar"])
+def test_an_output_folder_the_system_refuses_is_refused_before_estimating(blend, tmp_path,
+                                                                          capsys, flag):
+    # /proc passes every permission check for root (as CI runs) and creates
+    # no file: only writing there says so, and it must be said before the
+    # estimate runs, not after it.
+    target = {"--out": "/proc/sunlapse-probe.json", "--save": "/proc/sunlapse-probe.blend",
+              "--render-ar": "/proc/sunlapse-probe-ar"}[flag]
+    args = ["--out", target] if flag == "--out" else ["--out", tmp_path / "o.json", flag, target]
+    code, out, err = cli_run(capsys, *args)
+    assert_clear_error(code, err, 2, flag, "cannot write in the folder /proc")
+    assert "estimated" not in out + err
+    assert not os.path.exists(tmp_path / "o.json")
+
+
+def test_render_ar_under_a_file_is_refused(blend, tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("a file")
+    code, out, err = cli_run(capsys, "--out", tmp_path / "o.json",
+                             "--render-ar", tmp_path / "notes.txt" / "ar")
+    assert_clear_error(code, err, 2, "--render-ar", "is a file, not a folder")
+
+
 def test_a_failed_save_writes_no_track_and_keeps_the_old_one(blend, tmp_path, capsys,
                                                              monkeypatch):
     from sunlapse import cli
