@@ -13,7 +13,7 @@ from . import calibration, motion
 from .errors import check_progress
 from .options import SMOOTHING_SPACE, TWO_PASS_DEGREE, EstimateOptions
 from .raw import RawSun
-from ..core import angles, clock, smoothing, suncircle, sunpath, trackfile
+from ..core import angles, clock, smoothing, suncircle, sunpath, trackfile, trimmed_circle
 from ..core.trackfile import Sunlight
 
 
@@ -174,6 +174,17 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
 
     sunlit = {r.frame for r in raws if r.sunlight == Sunlight.YES}
     short = calibration.short_segment_frames(segments, sunlit) if calibrated else set()
+    unchecked = calibration.unchecked_frames(
+        (r.frame for r in raws if r.has_sun), (raws[k].frame for k in circle)
+    ) if calibrated and circle is not None else set()
+    if unchecked and not doubted:
+        track.report("confidence", trackfile.ProblemKind.FELL_BACK,
+                     f"{len(unchecked)} frame(s) with a Sun "
+                     f"({trackfile.frame_ranges(sorted(unchecked))}) lie in a stretch of the "
+                     f"clip too short to check their Suns against the Sun's path (fewer than "
+                     f"{trimmed_circle.MIN_FRAMES} frames with a Sun): their confidence stays "
+                     f"below 0.5")
+    short |= unchecked
 
     def reported(support: float, frame: Optional[int] = None) -> float:
         return calibration.probability(support, doubted_clip=doubted, short_segment=frame in short,
