@@ -55,16 +55,17 @@ MEASURED_SHARE_MIN = 0.85
 SHORT_SEGMENT_FRAMES = 4
 
 
-def unchecked_frames(frames_with_sun: Iterable[int], checked: Iterable[int]) -> Set[int]:
-    """The frames with a Sun that no circle of the Sun's path checked: their
-    segment had too few Suns for one (core/trimmed_circle.py's MIN_FRAMES),
-    as in a clip of a few frames. Their support has nothing to weigh it
-    against: on the suite's clips cut to 1, 2, 3 and 5 frames (every member
-    with 4 starts), 7 of 56, 5 of 152, 7 of 234 and 13 of 415 such frames
-    were more than 5 deg off at 0.98-0.99 (up to 148 deg), where the whole
-    clips have none; they stay below 0.5, as short segments do."""
-    done = set(checked)
-    return {f for f in frames_with_sun if f not in done}
+def unchecked_frames(frames: Iterable[Tuple[int, Optional[bool]]]) -> Set[int]:
+    """The frames, of (frame, circle_checked) pairs of the frames with a Sun,
+    whose Sun no circle of the Sun's path checked: their segment had too
+    few Suns for one (core/trimmed_circle.py's MIN_FRAMES), or their
+    shadows leave the Sun's height open and too few of the segment's pin
+    theirs, as in a clip of a few frames. Nothing weighs their support: on
+    the suite's scenes cut to 1-12 frames (bench/short_clips.py) frames
+    were up to 148 deg off at 0.98-0.99, where the whole clips have none
+    more than 5 deg off at 0.5 or more; they stay below 0.5, as short
+    segments do (None: a method without the check)."""
+    return {f for f, checked in frames if checked is False}
 
 
 def short_segment_frames(segments: Sequence[Sequence[int]],

@@ -175,15 +175,14 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     sunlit = {r.frame for r in raws if r.sunlight == Sunlight.YES}
     short = calibration.short_segment_frames(segments, sunlit) if calibrated else set()
     unchecked = calibration.unchecked_frames(
-        (r.frame for r in raws if r.has_sun), (raws[k].frame for k in circle)
-    ) if calibrated and circle is not None else set()
+        (r.frame, r.circle_checked) for r in raws if r.has_sun) if calibrated else set()
     if unchecked and not doubted:
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
                      f"{len(unchecked)} frame(s) with a Sun "
-                     f"({trackfile.frame_ranges(sorted(unchecked))}) lie in a stretch of the "
-                     f"clip too short to check their Suns against the Sun's path (fewer than "
-                     f"{trimmed_circle.MIN_FRAMES} frames with a Sun): their confidence stays "
-                     f"below 0.5")
+                     f"({trackfile.frame_ranges(sorted(unchecked))}) could not be checked "
+                     f"against the Sun's path (fewer than {trimmed_circle.MIN_FRAMES} frames "
+                     f"whose shadows pin the Sun's height in their stretch of the clip): "
+                     f"their confidence stays below 0.5")
     short |= unchecked
 
     def reported(support: float, frame: Optional[int] = None) -> float:

@@ -20,7 +20,9 @@ class RawSun:
     model's shadows fall (the frame could not show the Sun).
     clock_sun: (zenith, geographic azimuth) the ephemeris gives for the
     frame's capture time and place, where that puts it at night: its
-    predicted Sun, below the horizon."""
+    predicted Sun, below the horizon.
+    circle_checked: whether a circle of the Sun's path checked the Sun (the
+    whole-clip estimate's; None where the method has no such check)."""
     frame: int
     zenith_deg: Optional[float] = None
     azimuth_deg: Optional[float] = None
@@ -30,6 +32,7 @@ class RawSun:
     sunlight: Optional[Sunlight] = None
     clock_sun: Optional[Tuple[float, float]] = None
     shadows_in_view: bool = True
+    circle_checked: Optional[bool] = None
 
     @property
     def has_sun(self) -> bool:

@@ -232,8 +232,11 @@ class RawFrame:
     refined: bool = False         # the tracker refined it to sub-degree
     tracked: object = None        # native TrackedFrame when refined (FrameShadow:
     #                               a moving camera's, in its frame's pixels)
-    # The Sun on its segment's circle about the pole, where one was fitted.
+    # The Sun on its segment's circle about the pole, where one was fitted,
+    # and whether that circle checks this frame's Sun: a Sun whose height
+    # its shadows leave open only by a circle of the Suns that pin theirs.
     circle_in_world: Optional[np.ndarray] = None
+    circle_checked: bool = False
     # Direct sunlight on the frame; without it the frame keeps no Sun of
     # its own (finish.py predicts one from the segment's path).
     sunlight: Sunlight = Sunlight.UNKNOWN
@@ -1133,6 +1136,7 @@ def _doubt_by(segment: Sequence[RawFrame], fit: Any, by_pinned: bool) -> None:
     """doubt_off_circle's circle kept with each frame, and the doubt."""
     for i, r in enumerate(segment):
         r.circle_in_world = np.asarray(fit.sun_in_world[i], dtype=float)
+        r.circle_checked = by_pinned or not _height_unpinned(r)
         r.on_circle = r.confidence
         if r.sun_in_world is None:
             continue
@@ -1360,7 +1364,7 @@ def _raw_sun(r: RawFrame, north: float, clock_sun=None) -> RawSun:
     angles_of = (None, None) if r.sun_in_world is None else _geographic(r.sun_in_world, north)
     return RawSun(r.frame, *angles_of, confidence=r.on_circle, reason=r.reason,
                   tracked=r.tracked, sunlight=r.sunlight, clock_sun=clock_sun,
-                  shadows_in_view=r.shadows_in_view)
+                  shadows_in_view=r.shadows_in_view, circle_checked=r.circle_checked)
 
 
 def _note(track, scene, camera, samples, by_frame, options) -> None:

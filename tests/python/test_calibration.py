@@ -201,31 +201,32 @@ def test_a_short_segment_split_off_the_clip_stays_below_one_half():
 
 def test_frames_no_circle_of_the_suns_path_checked_stay_below_one_half():
     """A clip of a few frames, or a stretch of one, has too few Suns for the
-    circle of the Sun's path (trimmed_circle.MIN_FRAMES): nothing checks
-    their Suns, and on the suite's clips cut to 1-5 frames some were 10-148
-    deg off at 0.98."""
-    assert calibration.unchecked_frames([1, 2, 3, 4], [2, 3]) == {1, 4}
+    circle of the Sun's path (trimmed_circle.MIN_FRAMES), or too few whose
+    shadows pin the Sun's height: nothing checks their Suns, and on the
+    suite's scenes cut to 1-12 frames some were 5-148 deg off at 0.98."""
+    assert calibration.unchecked_frames([(1, False), (2, True), (3, None)]) == {1}
 
-    def finished(n, circled):
+    def finished(checked):
         raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97,
-                       sunlight=trackfile.Sunlight.YES) for f in range(1, n + 1)]
+                       sunlight=trackfile.Sunlight.YES, circle_checked=c)
+                for f, c in enumerate(checked, start=1)]
         track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
                                         "smoothing": "two_pass"})
-        circle = {k: (raws[k].zenith_deg, raws[k].azimuth_deg) for k in circled}
         finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
-                      [[r.frame for r in raws]], circle=circle)
+                      [[r.frame for r in raws]])
         return [f.confidence for f in track.frames], track.problem("confidence")
-    # Three frames, no circle: all held, and the run says why.
-    held, why = finished(3, [])
+    # Three frames no circle checked: all held, and the run says why.
+    held, why = finished([False] * 3)
     assert held == [calibration.DOUBTED_MAX_PROBABILITY] * 3
-    assert why is not None and "too short to check" in why.message
-    # Twelve frames, the circle fitted over the last eight: the first four held.
-    mixed, _ = finished(12, range(4, 12))
+    assert why is not None and "could not be checked" in why.message
+    # Twelve frames, the first four unchecked: those held.
+    mixed, _ = finished([False] * 4 + [True] * 8)
     assert mixed[:4] == [calibration.DOUBTED_MAX_PROBABILITY] * 4
     assert all(c > 0.9 for c in mixed[4:])
-    # Every frame on its circle: none held, nothing said.
-    checked, why = finished(12, range(12))
-    assert all(c > 0.9 for c in checked) and why is None
+    # Every frame checked, or a method without the check: none held, nothing said.
+    for flags in ([True] * 12, [None] * 12):
+        free, why = finished(flags)
+        assert all(c > 0.9 for c in free) and why is None
 
 
 class _Tracked:

@@ -456,6 +456,8 @@ def test_frames_after_sunset_have_no_sunlight_and_a_predicted_sun(world, times):
             assert r.sunlight == Sunlight.NO, (k, r)
             assert r.sun_in_world is None and r.confidence == 0.0 and r.reason, (k, r)
     raws = [whole_clip._raw_sun(r, 0.0) for r in result.frames]
+    # Every Sun of the day was checked by its circle (none held below 0.5).
+    assert all(raw.circle_checked for raw in raws if raw.has_sun)
     circle = {k: angles.angles_from_sun_in_world(r.circle_in_world)
               for k, r in enumerate(result.frames) if r.circle_in_world is not None}
     zs, azs = finish._smooth_segments([r.frame for r in raws], raws, result.segments,
