@@ -233,8 +233,11 @@ class RawFrame:
     tracked: object = None        # native TrackedFrame when refined (FrameShadow:
     #                               a moving camera's, in its frame's pixels)
     # The Sun on its segment's circle about the pole, where one was fitted,
-    # and whether that circle checks this frame's Sun: a Sun whose height
-    # its shadows leave open only by a circle of the Suns that pin theirs.
+    # and whether that circle checks this frame's Sun: only a circle fitted
+    # to Suns whose shadows pin their height (trimmed_circle.MIN_FRAMES of
+    # them) does; one bent with the others' open heights agrees with a
+    # wrong pinned Sun as well (fresh member urban15: 4 of 32 frames
+    # pinned, one 6.5 deg off at 0.98).
     circle_in_world: Optional[np.ndarray] = None
     circle_checked: bool = False
     # Direct sunlight on the frame; without it the frame keeps no Sun of
@@ -1136,7 +1139,7 @@ def _doubt_by(segment: Sequence[RawFrame], fit: Any, by_pinned: bool) -> None:
     """doubt_off_circle's circle kept with each frame, and the doubt."""
     for i, r in enumerate(segment):
         r.circle_in_world = np.asarray(fit.sun_in_world[i], dtype=float)
-        r.circle_checked = by_pinned or not _height_unpinned(r)
+        r.circle_checked = by_pinned  # RawFrame.circle_checked
         r.on_circle = r.confidence
         if r.sun_in_world is None:
             continue
