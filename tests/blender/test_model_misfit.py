@@ -56,7 +56,10 @@ def test_a_model_whose_casters_are_off_is_told_and_its_confidence_capped(long_pl
     assert true_track["model_misfit"] < limit
     assert not any(p["stage"] == "model" and "miss the footage" in p["message"]
                    for p in true_track["problems"])
-    assert max(f["confidence"] for f in true_track["frames"]) > 0.5
+    # Above the model rule's cap (its 5 frames are too few for the Sun's
+    # path to check them, which holds them just under 0.5).
+    assert max(f["confidence"] for f in true_track["frames"]) > \
+        calibration.MODEL_DOUBTED_PROBABILITY + 0.05
 
     assert rough_track["model_misfit"] >= limit
     assert all(f.get("shadow_misfit") is not None for f in rough_track["frames"]
