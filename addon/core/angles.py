@@ -22,11 +22,14 @@ _TINY = float(np.finfo(float).tiny)
 
 
 def wrap_azimuth_deg(azimuth_deg: Any) -> Any:
-    """An angle wrapped to [0, 360)."""
+    """An angle wrapped to [0, 360); a float for one angle (in plain floats:
+    it runs per Sun)."""
     # -1e-15 mod 360 rounds to 360.0, which is 0.
+    if not np.ndim(azimuth_deg):
+        one = float(azimuth_deg) % 360.0
+        return 0.0 if one >= 360.0 else one
     a = np.mod(azimuth_deg, 360.0)
-    a = np.where(a >= 360.0, 0.0, a)
-    return a if np.ndim(a) else float(a)
+    return np.where(a >= 360.0, 0.0, a)
 
 
 def wrap_signed_deg(angle_deg: Any) -> Any:
@@ -57,9 +60,8 @@ def angles_from_sun_in_world(sun_in_world: Any) -> Tuple[Any, Any]:
     if v.shape == (3,):
         x, y, z = float(v[0]), float(v[1]), float(v[2])
         one = max(math.sqrt(x * x + y * y + z * z), _TINY)
-        azimuth_deg = math.degrees(math.atan2(x, y)) % 360.0
         return (math.degrees(math.acos(min(1.0, max(-1.0, z / one)))),
-                0.0 if azimuth_deg >= 360.0 else azimuth_deg)
+                wrap_azimuth_deg(math.degrees(math.atan2(x, y))))
     norm = np.maximum(np.linalg.norm(v, axis=-1), _TINY)
     zenith = np.degrees(np.arccos(np.clip(v[..., 2] / norm, -1.0, 1.0)))
     azimuth = wrap_azimuth_deg(np.degrees(np.arctan2(v[..., 0], v[..., 1])))

@@ -183,10 +183,11 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"against the Sun's path (fewer than {trimmed_circle.MIN_FRAMES} frames "
                      f"whose shadows pin the Sun's height in their stretch of the clip): "
                      f"their confidence stays below 0.5")
-    short |= unchecked
+    # Both hold a frame below 0.5 alike (calibration.probability's short_segment).
+    held = short | unchecked
 
     def reported(support: float, frame: Optional[int] = None) -> float:
-        return calibration.probability(support, doubted_clip=doubted, short_segment=frame in short,
+        return calibration.probability(support, doubted_clip=doubted, short_segment=frame in held,
                                        model_doubted_clip=model_doubted) if calibrated else support
     if track.initial and track.initial.get("confidence") is not None:
         track.initial["confidence"] = reported(track.initial["confidence"],

@@ -256,17 +256,21 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
   std::vector<float> alpha(static_cast<size_t>(block_frames) * D);
   std::vector<int> back(static_cast<size_t>(block_frames) * D, -1);
   std::vector<uint8_t> jumped(static_cast<size_t>(block_frames) * D, 0);
+  // One forward step into frame t: `cost` becomes alpha[t]; the step's
+  // back-pointers and alpha go to row `row` of the kept arrays, or nowhere
+  // (row < 0).
+  auto forward = [&](int t, int64_t row) {
+    const size_t at = static_cast<size_t>(std::max<int64_t>(row, 0)) * D;
+    relax(cost, t, &next, row >= 0 ? &back[at] : nullptr,
+          row >= 0 ? &jumped[at] : nullptr);
+    for (int d = 0; d < D; ++d) next[d] += o.evidence_weight * cost_of(t, d);
+    std::swap(cost, next);
+    if (row >= 0) std::copy(cost.begin(), cost.end(), alpha.begin() + at);
+  };
   for (int d = 0; d < D; ++d) cost[d] = o.evidence_weight * cost_of(0, d);
   if (keep_whole) std::copy(cost.begin(), cost.end(), alpha.begin());
   for (int t = 0; t < T; ++t) {
-    if (t > 0) {
-      const size_t row = static_cast<size_t>(t) * D;
-      relax(cost, t, &next, keep_whole ? &back[row] : nullptr,
-            keep_whole ? &jumped[row] : nullptr);
-      for (int d = 0; d < D; ++d) next[d] += o.evidence_weight * cost_of(t, d);
-      std::swap(cost, next);
-      if (keep_whole) std::copy(cost.begin(), cost.end(), alpha.begin() + row);
-    }
+    if (t > 0) forward(t, keep_whole ? t : -1);
     if (t % block_frames == 0) {
       std::copy(cost.begin(), cost.end(),
                 checkpoint.begin() + static_cast<size_t>(t / block_frames) * D);
@@ -292,14 +296,7 @@ SunPathResult SolveSunPath(const SkyEvidence& evidence,
       for (int dd = 0; dd < D; ++dd)
         cost[dd] = checkpoint[static_cast<size_t>(b) * D + dd];
       std::copy(cost.begin(), cost.end(), alpha.begin());
-      for (int t = t0 + 1; t < t1; ++t) {
-        const size_t row = static_cast<size_t>(t - t0) * D;
-        relax(cost, t, &next, &back[row], &jumped[row]);
-        for (int dd = 0; dd < D; ++dd)
-          next[dd] += o.evidence_weight * cost_of(t, dd);
-        std::swap(cost, next);
-        std::copy(cost.begin(), cost.end(), alpha.begin() + row);
-      }
+      for (int t = t0 + 1; t < t1; ++t) forward(t, t - t0);
     }
     // Into the next block's first frame: its back-pointers come from this
     // block's last alpha (now in `cost`).
