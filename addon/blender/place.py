@@ -107,7 +107,7 @@ def _with_flags(context, options, flags: PlaceTimeFlags) -> dict:
     seconds = flags.frame_seconds if flags.frame_seconds is not None else options.frame_seconds
     if lat is None and lon is None:
         # No place anywhere: the Sun's circle about the pole is fitted
-        # instead (core.suncircle), in real time when the seconds per frame
+        # instead (estimate/sun_circle.py), in real time when the seconds per frame
         # are known, else per frame.
         _check(seconds, "--frame-seconds", 1e-9, math.inf, "a positive number of seconds")
         return {"frame_seconds": seconds}

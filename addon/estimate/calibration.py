@@ -58,8 +58,8 @@ SHORT_SEGMENT_FRAMES = 4
 def unchecked_frames(frames: Iterable[Tuple[int, Optional[bool]]]) -> Set[int]:
     """The frames, of (frame, circle_checked) pairs of the frames with a Sun,
     whose Sun no circle of the Sun's path checked: their segment had too
-    few Suns whose shadows pin their height for one (core/trimmed_circle.py's
-    MIN_FRAMES), as in a clip of a few frames. Nothing weighs their support: on
+    few Suns whose shadows pin their height for one (sun_circle.py's
+    min_frames()), as in a clip of a few frames. Nothing weighs their support: on
     the suite's scenes cut to 1-12 frames (bench/short_clips.py) frames
     were up to 148 deg off at 0.98-0.99, where the whole clips have none
     more than 5 deg off at 0.5 or more; they stay below 0.5, as short

@@ -9,17 +9,17 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import calibration, motion
+from . import calibration, motion, sun_circle
 from .errors import check_progress
 from .options import SMOOTHING_SPACE, TWO_PASS_DEGREE, EstimateOptions
 from .raw import RawSun
-from ..core import angles, clock, smoothing, suncircle, sunpath, trackfile, trimmed_circle
+from ..core import angles, clock, smoothing, sunpath, trackfile
 from ..core.trackfile import Sunlight
 
 
 def _sun_circle(track, numbers, raws, options, north):
     """Physical smoothing without a place: the Sun's small circle about the
-    pole fitted to the raw Suns (core.suncircle), which also says what
+    pole fitted to the raw Suns (sun_circle.py), which also says what
     latitude, declination and north the path implies. Same return as
     _physical."""
     if options.frame_times is not None:
@@ -29,8 +29,8 @@ def _sun_circle(track, numbers, raws, options, north):
         t, real = [f * options.frame_seconds for f in numbers], True
     else:
         t, real = list(numbers), False
-    fit = suncircle.fit_circle(t, [r.zenith_deg for r in raws], _world_azimuths(raws, north),
-                               [r.confidence for r in raws], times_are_seconds=real)
+    fit = sun_circle.fit_circle(t, [r.zenith_deg for r in raws], _world_azimuths(raws, north),
+                                [r.confidence for r in raws], times_are_seconds=real)
     if not fit.success:
         track.report("smoothing", trackfile.ProblemKind.FELL_BACK,
                      f"physical smoothing without a place fits the Sun's circle about the pole, "
@@ -180,7 +180,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
                      f"{len(unchecked)} frame(s) with a Sun "
                      f"({trackfile.frame_ranges(sorted(unchecked))}) could not be checked "
-                     f"against the Sun's path (fewer than {trimmed_circle.MIN_FRAMES} frames "
+                     f"against the Sun's path (fewer than {sun_circle.min_frames()} frames "
                      f"whose shadows pin the Sun's height in their stretch of the clip): "
                      f"their confidence stays below 0.5")
     # Both hold a frame below 0.5 alike (calibration.probability's short_segment).

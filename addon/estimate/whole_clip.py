@@ -43,12 +43,13 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tupl
 import numpy as np
 
 from . import calibration, finish, frames as clip_frames, motion, native_loader, notes, untimed
+from . import sun_circle
 from .moving_view import SHADOWS_IN_VIEW, SHADOWS_OUT_OF_VIEW, MovingView, reference_camera
 from .errors import Cancelled, EstimateError
 from .frames import Gray
 from .options import gamma
 from .raw import RawSun
-from ..core import angles, clock, trackfile, trimmed_circle
+from ..core import angles, clock, trackfile
 from ..core.trackfile import Sunlight
 
 # Frames spread over the clip whose high quantile per surface sample is its
@@ -117,13 +118,12 @@ FOLLOWED_BEYOND_CONFIDENCE = 0.25
 # samples), and without capture times the path may step 12 deg a frame:
 # it zigzagged along such ridges with full margins. The Sun's path over a
 # segment is a small circle at a steady rate; fitted (trimmed:
-# core/trimmed_circle.py) to the first path's measured frames, it is a
+# sun_circle.py's fit_trimmed) to the first path's measured frames, it is a
 # prior for choosing the path again where the first path strayed further
-# than PRIOR_STRAY_DEG from it (sun_path.h: prior_*). Not used on fewer
-# than PRIOR_MIN_FRAMES measured frames or when the fit's median residual
-# exceeds PRIOR_MAX_RESIDUAL_DEG (the first path too far from any circle
-# to trust one).
-PRIOR_MIN_FRAMES = 8
+# than PRIOR_STRAY_DEG from it (sun_path.h: prior_*). Not used where the
+# fit has too few measured frames (TrimmedCircleOptions.min_frames) or its
+# median residual exceeds PRIOR_MAX_RESIDUAL_DEG (the first path too far
+# from any circle to trust one).
 PRIOR_MAX_RESIDUAL_DEG = 3.0
 PRIOR_STRAY_DEG = 4.0
 
@@ -136,7 +136,7 @@ PRIOR_STRAY_DEG = 4.0
 # confidently wrong over a few frames (a pole's shadow along a paving
 # joint); the Sun's path over the segment cannot bend that way, and a Sun
 # far off it must not steer the smoothing either. The fit is trimmed
-# (core/trimmed_circle.py): a third of a segment's Suns stuck a few degrees to
+# (sun_circle.h): a third of a segment's Suns stuck a few degrees to
 # one side (suite scene 16's low-Sun frames) pulled a Huber fit through
 # them, and they kept their confidence. Suns within CIRCLE_INLIER_FLOOR_DEG
 # of the circle always take part in the fit (a refined Sun's own scatter).
@@ -234,7 +234,7 @@ class RawFrame:
     #                               a moving camera's, in its frame's pixels)
     # The Sun on its segment's circle about the pole, where one was fitted,
     # and whether that circle checks this frame's Sun: only a circle fitted
-    # to Suns whose shadows pin their height (trimmed_circle.MIN_FRAMES of
+    # to Suns whose shadows pin their height (TrimmedCircleOptions.min_frames of
     # them) does; one bent with the others' open heights agrees with a
     # wrong pinned Sun as well (fresh member urban15: 4 of 32 frames
     # pinned, one 6.5 deg off at 0.98).
@@ -316,7 +316,7 @@ def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
                   times_s: Optional[Sequence[float]], n: int,
                   spacing_deg: float) -> Optional[np.ndarray]:
     """Per frame the Sun on its circle about the pole fitted (fit_circle:
-    core/trimmed_circle.py's fit_trimmed) to the path's measured frames in
+    sun_circle.py's fit_trimmed) to the path's measured frames in
     the frame's segment ((n, 3), NaN rows where no fit holds), or None when the path
     keeps to the fitted circles (nothing to choose again). The grid's
     cells are the path's precision: the inlier limit never falls below a
@@ -327,8 +327,6 @@ def _circle_prior(fit_circle: Callable[..., Any], path: _Path,
         ks = list(range(lo, hi))
         suns = [directions[path.direction[k]]
                 if path.measured[k] and path.direction[k] >= 0 else None for k in ks]
-        if sum(s is not None for s in suns) < PRIOR_MIN_FRAMES:
-            continue
         times = [float(k) if times_s is None else float(times_s[k]) for k in ks]
         fit = fit_circle(times, suns, spacing_deg, times_are_seconds=times_s is not None)
         if not fit.success or fit.residual_deg is None or \
@@ -440,7 +438,7 @@ def estimate(native, scene, camera, frames: Sequence[int],
     without them the frames are read with read_gray, and the pass's held in
     memory (tests, synthetic clips). `times_s`: capture times in seconds
     (None when unknown). `native`: the compiled module, and `fit_circle`:
-    the trimmed fit of the Sun's circle (core/trimmed_circle.py's
+    the trimmed fit of the Sun's circle (sun_circle.py's
     fit_trimmed; None: the path gets no circle prior and no frame is
     doubted off a circle), passed in, so this controller can be driven with
     stand-ins. `clock_elevation_deg`: per frame, the Sun's elevation the
@@ -1109,7 +1107,7 @@ def _segment_circle(segment: Sequence[RawFrame], t: Sequence[float], times_are_s
     # there are enough of them for a fit (ELEVATION_PINNED_MAX_DEG).
     pinned = [None if sun is None or _height_unpinned(r) else sun
               for sun, r in zip(suns, segment)]
-    by_pinned = sum(sun is not None for sun in pinned) >= trimmed_circle.MIN_FRAMES
+    by_pinned = sum(sun is not None for sun in pinned) >= sun_circle.min_frames()
     fit = fit_circle(list(t), pinned if by_pinned else suns, CIRCLE_INLIER_FLOOR_DEG,
                      [max(r.confidence, 1e-3) for r in segment],
                      times_are_seconds=times_are_seconds)
@@ -1262,7 +1260,7 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
         native, scene, camera, visit, reads.read_gray, options.ground_object_ids, times_s=seconds,
         ignore_top_rows=options.ignore_top_rows,
         progress=None if progress is None else (lambda x: progress(0.95 * x)),
-        stream=reads.stream, source=reads.frame_source, fit_circle=trimmed_circle.fit_trimmed,
+        stream=reads.stream, source=reads.frame_source, fit_circle=sun_circle.fit_trimmed,
         clock_elevation_deg=elevation, frame_cameras=frame_cameras,
         refine_model=options.refine_model)
     if result.clock_contradicted:

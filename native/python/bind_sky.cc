@@ -10,11 +10,148 @@
 #include "images.h"
 #include "options.h"
 #include "sunlapse/sky/sky_evidence.h"
+#include "sunlapse/sky/sun_circle.h"
 #include "sunlapse/sky/sun_path.h"
 
 namespace sunlapse::python {
 
+namespace {
+
+// (N, 3) directions toward the Sun (NaN rows: none) from any array-like.
+std::vector<Eigen::Vector3d> SunsArg(const py::object& suns, const char* name) {
+  const auto a =
+      py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(
+          suns);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3)
+    throw py::value_error(std::string(name) +
+                          ": expected an (N, 3) array of directions toward "
+                          "the Sun (NaN rows: none)");
+  const auto v = a.unchecked<2>();
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(static_cast<size_t>(a.shape(0)));
+  for (py::ssize_t i = 0; i < a.shape(0); ++i)
+    out.emplace_back(v(i, 0), v(i, 1), v(i, 2));
+  return out;
+}
+
+py::array_t<double> Rows3(const std::vector<Eigen::Vector3d>& d) {
+  py::array_t<double> out({static_cast<py::ssize_t>(d.size()), py::ssize_t(3)});
+  auto w = out.mutable_unchecked<2>();
+  for (size_t i = 0; i < d.size(); ++i) {
+    for (int k = 0; k < 3; ++k) w(i, k) = d[i][k];
+  }
+  return out;
+}
+
+void BindSunCircle(py::module_& m) {
+  OptionsClass<SunCircleOptions>(m, "SunCircleOptions",
+                                 "Options of fit_sun_circle (sun_circle.h).")
+      .field("times_are_seconds", &SunCircleOptions::times_are_seconds,
+             "Times are seconds (the rate is 15 deg/h) or frame numbers "
+             "(False: the rate is fitted).")
+      .field("iterations", &SunCircleOptions::iterations,
+             "Levenberg-Marquardt iterations at most.")
+      .field("reweight_every", &SunCircleOptions::reweight_every,
+             "Iterations between refreshes of the robust (Huber) weights.")
+      .field("settled_step_rad", &SunCircleOptions::settled_step_rad,
+             "A step moving no parameter by more than this (radians) has "
+             "settled.")
+      .field("settled_weight", &SunCircleOptions::settled_weight,
+             "Settled robust weights change by less than this.");
+
+  OptionsClass<TrimmedCircleOptions>(
+      m, "TrimmedCircleOptions",
+      "Options of fit_trimmed_sun_circle (sun_circle.h).")
+      .field("inlier_medians", &TrimmedCircleOptions::inlier_medians,
+             "Suns further than this many times the inliers' median distance "
+             "are left out.")
+      .field("rounds", &TrimmedCircleOptions::rounds,
+             "Trimming rounds at most.")
+      .field("round_iterations", &TrimmedCircleOptions::round_iterations,
+             "Iterations of each round's fit.")
+      .field("max_fit_frames", &TrimmedCircleOptions::max_fit_frames,
+             "Suns, spread over the segment, that take part in the rounds.")
+      .field("min_frames", &TrimmedCircleOptions::min_frames,
+             "Suns a trimmed fit needs.")
+      .field("min_inlier_share", &TrimmedCircleOptions::min_inlier_share,
+             "Share of the Suns a start's circle must hold to be a "
+             "candidate.");
+
+  py::enum_<SunCircleFit::Status>(m, "SunCircleStatus")
+      .value("SUCCESS", SunCircleFit::Status::kSuccess)
+      .value("TOO_FEW_SUNS", SunCircleFit::Status::kTooFewSuns)
+      .value("SAME_TIMES", SunCircleFit::Status::kSameTimes)
+      .value("NO_CIRCLE", SunCircleFit::Status::kNoCircle);
+
+  py::class_<SunCircleFit>(m, "SunCircleFit",
+                           "The Sun's small circle about the pole "
+                           "(sun_circle.h); per-time arrays as numpy.")
+      .def_readonly("status", &SunCircleFit::status)
+      .def_readonly("message", &SunCircleFit::message)
+      .def_readonly("latitude_deg", &SunCircleFit::latitude_deg)
+      .def_readonly("declination_deg", &SunCircleFit::declination_deg)
+      .def_readonly("north_offset_deg", &SunCircleFit::north_offset_deg)
+      .def_readonly("rate_deg", &SunCircleFit::rate_deg)
+      .def_readonly("residual_deg", &SunCircleFit::residual_deg)
+      .def_property_readonly(
+          "sun_in_world",
+          [](const SunCircleFit& f) { return Rows3(f.sun_in_world); })
+      .def_property_readonly("hour_angle_deg",
+                             [](const SunCircleFit& f) {
+                               return py::array_t<double>(
+                                   f.hour_angle_deg.size(),
+                                   f.hour_angle_deg.data());
+                             })
+      .def_property_readonly("off_deg",
+                             [](const SunCircleFit& f) {
+                               return py::array_t<double>(f.off_deg.size(),
+                                                          f.off_deg.data());
+                             })
+      .def_readonly("inliers", &SunCircleFit::inliers);
+
+  m.def(
+      "fit_sun_circle",
+      [](const std::vector<double>& times, const py::object& suns,
+         const std::vector<double>& weights, const py::object& options,
+         const py::kwargs& kwargs) {
+        const SunCircleOptions o =
+            OptionsFrom<SunCircleOptions>(options, kwargs);
+        const std::vector<Eigen::Vector3d> s = SunsArg(suns, "suns_in_world");
+        py::gil_scoped_release release;
+        return FitSunCircle(times, s, weights, o);
+      },
+      py::arg("times"), py::arg("suns_in_world"),
+      py::arg("weights") = std::vector<double>(),
+      py::arg("options") = py::none(),
+      "The Sun's small circle about the pole through the given Suns "
+      "(sun_circle.h). times: seconds or frame numbers; suns_in_world: (N, 3) "
+      "directions toward the Sun (NaN rows: none); weights: empty or one per "
+      "Sun. Options as SunCircleOptions or its fields as keywords.");
+
+  m.def(
+      "fit_trimmed_sun_circle",
+      [](const std::vector<double>& times, const py::object& suns,
+         double floor_deg, const std::vector<double>& weights,
+         const py::object& circle_options, const py::object& options) {
+        const SunCircleOptions c =
+            OptionsFrom<SunCircleOptions>(circle_options, py::kwargs());
+        const TrimmedCircleOptions o =
+            OptionsFrom<TrimmedCircleOptions>(options, py::kwargs());
+        const std::vector<Eigen::Vector3d> s = SunsArg(suns, "suns_in_world");
+        py::gil_scoped_release release;
+        return FitTrimmedSunCircle(times, s, weights, floor_deg, c, o);
+      },
+      py::arg("times"), py::arg("suns_in_world"), py::arg("floor_deg"),
+      py::arg("weights") = std::vector<double>(),
+      py::arg("circle_options") = py::none(), py::arg("options") = py::none(),
+      "The Sun's circle with the far Suns left out (sun_circle.h): the inlier "
+      "limit never falls below floor_deg. off_deg and inliers are filled.");
+}
+
+}  // namespace
+
 void BindSky(py::module_& m) {
+  BindSunCircle(m);
   OptionsClass<SkyEvidenceOptions>(m, "SkyEvidenceOptions",
                                    "Options of SkyEvidence (sky_evidence.h).")
       .field("num_directions", &SkyEvidenceOptions::num_directions,

@@ -144,10 +144,10 @@ def native_defaults(native):
 # Python constants equal to a native default by coincidence, not copies of
 # it (a different quantity with the same number): name -> why.
 NOT_COPIES = {
-    "estimate.whole_clip.PRIOR_MIN_FRAMES": "measured frames a circle prior needs, not the "
-                                            "frames a stream reads near a key frame",
-    "core.trimmed_circle.MIN_FRAMES": "Suns a circle fit needs, not a stream's near frames",
-    "core.trimmed_circle.MIN_INLIER_SHARE": "a share of Suns, not the tracker's contrast",
+    "estimate.whole_clip.SUNLIT_EXPLAINED_SHARE": "a share of a frame explained, not of the "
+                                                  "Suns a circle holds",
+    "estimate.finish.PREDICT_PAST_SPAN_SHARE": "a share of a segment's span, not of the Suns a "
+                                               "circle holds",
     "estimate.whole_clip.SEGMENT_MIN_MARGIN": "a jumped-to segment's lead in log-likelihood, "
                                               "not the frames a stream reads near a key frame",
     "estimate.untimed.LOOP_GROUP_MAX": "frames in a loop check's group, not the path's "

@@ -201,7 +201,7 @@ def test_a_short_segment_split_off_the_clip_stays_below_one_half():
 
 def test_frames_no_circle_of_the_suns_path_checked_stay_below_one_half():
     """A clip of a few frames, or a stretch of one, has too few Suns for the
-    circle of the Sun's path (trimmed_circle.MIN_FRAMES), or too few whose
+    circle of the Sun's path (TrimmedCircleOptions.min_frames), or too few whose
     shadows pin the Sun's height: nothing checks their Suns, and on the
     suite's scenes cut to 1-12 frames some were 5-148 deg off at 0.98."""
     assert calibration.unchecked_frames([(1, False), (2, True), (3, None)]) == {1}

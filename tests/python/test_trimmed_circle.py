@@ -1,6 +1,6 @@
-"""The trimmed fit of the Sun's circle (addon/core/trimmed_circle.py): a third
-of the Suns stuck to one side of the path must not bend the circle, which
-then says how far each of them is off. No Blender, no native module."""
+"""The trimmed fit of the Sun's circle (estimate/sun_circle.py over
+sky/sun_circle.h): a third of the Suns stuck to one side of the path must not
+bend the circle, which then says how far each of them is off. No Blender."""
 import math
 import os
 import sys
@@ -16,8 +16,9 @@ if "sunlapse" not in sys.modules:
     _package = types.ModuleType("sunlapse")
     _package.__path__ = [os.path.join(ROOT, "addon")]
     sys.modules["sunlapse"] = _package
-from sunlapse.core import angles, suncircle  # noqa: E402
-from sunlapse.core import trimmed_circle as circle  # noqa: E402
+pytest.importorskip("_native")
+from sunlapse.core import angles  # noqa: E402
+from sunlapse.estimate import sun_circle as circle  # noqa: E402
 
 
 def sun_at(hour_angle_deg, latitude_deg=40.0, declination_deg=15.0):
@@ -48,8 +49,8 @@ def test_a_third_of_the_suns_to_one_side_bends_a_plain_fit():
     # well over a degree off the Sun by the stuck third.
     truth, measured = clip()
     zen, azi = zip(*(angles.angles_from_sun_in_world(s) for s in measured))
-    fit = suncircle.fit_circle(list(range(len(truth))), list(zen), list(azi),
-                               times_are_seconds=False)
+    fit = circle.fit_circle(list(range(len(truth))), list(zen), list(azi),
+                            times_are_seconds=False)
     assert fit.success
     worst = max(angles.angle_between_deg(angles.sun_in_world_from_angles(z, a), s)
                 for z, a, s in zip(fit.zenith_deg, fit.azimuth_world_deg, truth))

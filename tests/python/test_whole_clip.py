@@ -23,8 +23,8 @@ if "sunlapse" not in sys.modules:
 # would register its types twice.
 native = pytest.importorskip("_native")
 sys.modules.setdefault("sunlapse._native", native)
-from sunlapse.core import trimmed_circle  # noqa: E402
-from sunlapse.estimate import calibration, finish, options as estimate_options  # noqa: E402
+from sunlapse.estimate import calibration, finish, sun_circle  # noqa: E402
+from sunlapse.estimate import options as estimate_options  # noqa: E402
 from sunlapse.estimate.raw import RawSun  # noqa: E402
 from sunlapse.core import angles  # noqa: E402
 from sunlapse.estimate import moving_view as moving, untimed, whole_clip  # noqa: E402
@@ -267,7 +267,7 @@ def doubted(raws, times):
     seg = [whole_clip.RawFrame(f, angles.sun_in_world_from_angles(z, a), c)
            for f, z, a, c in raws]
     seconds = [(t - times[0]).total_seconds() for t in times]
-    whole_clip.doubt_off_circle(seg, seconds, True, trimmed_circle.fit_trimmed)
+    whole_clip.doubt_off_circle(seg, seconds, True, sun_circle.fit_trimmed)
     circle = {k: tuple(float(v) for v in angles.angles_from_sun_in_world(r.circle_in_world))
               for k, r in enumerate(seg) if r.circle_in_world is not None}
     return seg, [raw_sun(r) for r in seg], circle
@@ -325,7 +325,7 @@ def test_suns_whose_height_the_shadows_do_not_pin_take_the_pinned_frames_circle(
                                refined=True, tracked=_Pinned(99.0 if f in unpinned else 0.5))
            for f, z, a, c in raws]
     seconds = [(t - times[0]).total_seconds() for t in times]
-    whole_clip.doubt_off_circle(seg, seconds, True, trimmed_circle.fit_trimmed)
+    whole_clip.doubt_off_circle(seg, seconds, True, sun_circle.fit_trimmed)
     for k, r in enumerate(seg):
         if r.frame in unpinned and r.frame != 12:
             assert error_deg(r.sun_in_world, truth[k]) < 0.5, r
@@ -341,7 +341,7 @@ def test_suns_whose_height_the_shadows_do_not_pin_take_the_pinned_frames_circle(
                                on_circle=0.95, refined=True,
                                tracked=_Pinned(0.5 if r.frame > n - 4 else 99.0))
            for r, (_, z, a, _) in zip(seg, raws)]
-    whole_clip.doubt_off_circle(few, seconds, True, trimmed_circle.fit_trimmed)
+    whole_clip.doubt_off_circle(few, seconds, True, sun_circle.fit_trimmed)
     assert all(r.confidence == 0.95 for r in few)
 
 
@@ -445,7 +445,7 @@ def test_frames_after_sunset_have_no_sunlight_and_a_predicted_sun(world, times):
     frames = [draw(world, truth[k], k) if k < lit else draw_dusk(world, 0.3, k)
               for k in range(n)]
     result = run(world, frames, [600.0 * k for k in range(n)] if times else None,
-                 trimmed_circle.fit_trimmed)
+                 sun_circle.fit_trimmed)
     assert len(result.segments) == 1 and result.jumps == []
     Sunlight = whole_clip.Sunlight
     for k, r in enumerate(result.frames):
@@ -507,7 +507,7 @@ def test_a_loop_whose_sun_goes_back_less_than_a_step_is_split(world):
     once = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(n)]
     truth = once * 4
     result = run(world, [draw(world, d, k) for k, d in enumerate(truth)], None,
-                 trimmed_circle.fit_trimmed)
+                 sun_circle.fit_trimmed)
     assert result.jumps == [n + 1, 2 * n + 1, 3 * n + 1]
     assert [len(s) for s in result.segments] == [n] * 4
     zs, azs = smooth(result)
@@ -516,7 +516,7 @@ def test_a_loop_whose_sun_goes_back_less_than_a_step_is_split(world):
     # A clip that only goes forward is not cut, whatever its pace.
     steady = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(2 * n)]
     assert run(world, [draw(world, d, k) for k, d in enumerate(steady)], None,
-               trimmed_circle.fit_trimmed).jumps == []
+               sun_circle.fit_trimmed).jumps == []
 
 
 def test_a_clip_played_forward_and_back_is_split_where_it_turns(world):
@@ -530,7 +530,7 @@ def test_a_clip_played_forward_and_back_is_split_where_it_turns(world):
     forward = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(n)]
     truth = forward + forward[::-1] + forward
     result = run(world, [draw(world, d, k) for k, d in enumerate(truth)], None,
-                 trimmed_circle.fit_trimmed)
+                 sun_circle.fit_trimmed)
     assert [len(s) for s in result.segments] == [n] * 3, result.segments
     zs, azs = smooth(result)
     for k in range(3 * n):
@@ -539,7 +539,7 @@ def test_a_clip_played_forward_and_back_is_split_where_it_turns(world):
     slowing = [sun(50 - 0.3 * k * (1.0 - k / (4.0 * n)), 120 + 0.4 * k * (1.0 - k / (4.0 * n)))
                for k in range(2 * n)]
     assert run(world, [draw(world, d, k) for k, d in enumerate(slowing)], None,
-               trimmed_circle.fit_trimmed).jumps == []
+               sun_circle.fit_trimmed).jumps == []
 
 
 def test_a_clip_whose_interval_changes_keeps_every_frames_sun(world):
@@ -551,7 +551,7 @@ def test_a_clip_whose_interval_changes_keeps_every_frames_sun(world):
     pace = [k if k < 20 else 20 + 3 * (k - 20) for k in range(40)]
     truth = [sun(60 - 0.5 * p, 100 + 0.8 * p) for p in pace]
     result = run(world, [draw(world, d, k) for k, d in enumerate(truth)], None,
-                 trimmed_circle.fit_trimmed)
+                 sun_circle.fit_trimmed)
     assert all(r.sunlight == whole_clip.Sunlight.YES and r.sun_in_world is not None
                for r in result.frames)
     zs, azs = smooth(result)
@@ -567,9 +567,11 @@ def test_the_pace_clock_is_the_frame_numbers_while_the_pace_holds():
     n = 60
 
     def on_circle(hours):   # the Sun at 45 N in April, 4 minutes a frame
-        from sunlapse.core import suncircle
-        return list(suncircle._model(np.array([math.radians(45.0), 0.0, math.radians(10.0), -1.0]),
-                                     np.asarray(hours, float), -math.radians(15.0)))
+        pole, e1, e2 = (np.array(v) for v in ([0.0, 0.5 ** 0.5, 0.5 ** 0.5],
+                                              [0.0, -(0.5 ** 0.5), 0.5 ** 0.5], [1.0, 0.0, 0.0]))
+        dec = math.radians(10.0)
+        return [math.cos(dec) * (math.cos(h) * e1 + math.sin(h) * e2) + math.sin(dec) * pole
+                for h in (-1.0 - math.radians(15.0) * np.asarray(hours, float))]
     steady = [s + rng.normal(0, 0.002, 3) for s in on_circle([k / 15.0 for k in range(n)])]
     steady[30] = sun(20.0, 200.0)
     numbers = list(range(1, n + 1))

@@ -15,8 +15,9 @@ if "sunlapse" not in sys.modules:
     _package.__path__ = [os.path.join(ROOT, "addon")]
     sys.modules["sunlapse"] = _package
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sunlapse.core import angles, trimmed_circle  # noqa: E402
-from sunlapse.estimate import whole_clip  # noqa: E402
+pytest.importorskip("_native")
+from sunlapse.core import angles  # noqa: E402
+from sunlapse.estimate import sun_circle, whole_clip  # noqa: E402
 from test_trimmed_circle import clip  # noqa: E402
 
 # The path's cells (sky.spacing_deg, the fit's inlier floor): a grid finer
@@ -34,7 +35,7 @@ def path_through(suns, measured=None):
 @pytest.mark.parametrize("seed", [3, 102])
 def test_a_zigzag_off_the_circle_gets_the_suns_circle_as_prior(seed):
     truth, suns = clip(seed=seed)
-    prior = whole_clip._circle_prior(trimmed_circle.fit_trimmed, path_through(suns),
+    prior = whole_clip._circle_prior(sun_circle.fit_trimmed, path_through(suns),
                                      [tuple(s) for s in suns], None, len(suns), SPACING_DEG)
     assert prior is not None
     for k, s in enumerate(truth):
@@ -44,11 +45,11 @@ def test_a_zigzag_off_the_circle_gets_the_suns_circle_as_prior(seed):
 def test_a_path_on_its_circle_gets_no_prior_nor_does_a_short_one():
     _, suns = clip(stuck=())
     directions = [tuple(s) for s in suns]
-    assert whole_clip._circle_prior(trimmed_circle.fit_trimmed, path_through(suns),
+    assert whole_clip._circle_prior(sun_circle.fit_trimmed, path_through(suns),
                                     directions, None, len(suns), SPACING_DEG) is None
     _, stuck = clip(seed=102)
-    few = [k < whole_clip.PRIOR_MIN_FRAMES - 1 for k in range(len(stuck))]
-    assert whole_clip._circle_prior(trimmed_circle.fit_trimmed, path_through(stuck, few),
+    few = [k < sun_circle.min_frames() - 1 for k in range(len(stuck))]
+    assert whole_clip._circle_prior(sun_circle.fit_trimmed, path_through(stuck, few),
                                     [tuple(s) for s in stuck], None, len(stuck),
                                     SPACING_DEG) is None
 
