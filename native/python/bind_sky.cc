@@ -282,16 +282,7 @@ void BindSky(py::module_& m) {
           [](const SkyEvidence& e) { return e.grid().spacing_deg(); })
       .def_property_readonly(
           "directions",
-          [](const SkyEvidence& e) {
-            const auto& d = e.grid().directions();
-            py::array_t<double> out(
-                {static_cast<py::ssize_t>(d.size()), py::ssize_t(3)});
-            auto w = out.mutable_unchecked<2>();
-            for (size_t i = 0; i < d.size(); ++i) {
-              for (int k = 0; k < 3; ++k) w(i, k) = d[i][k];
-            }
-            return out;
-          })
+          [](const SkyEvidence& e) { return Rows3(e.grid().directions()); })
       .def(
           "set_reference",
           [](SkyEvidence& e, const py::list& frames) {
@@ -322,19 +313,9 @@ void BindSky(py::module_& m) {
       [](const SkyEvidence& e, const std::vector<double>& times_s,
          const std::vector<uint8_t>& segment_start, const SunPathOptions& o,
          const py::object& prior_in, const std::vector<uint8_t>& ignored) {
-        std::vector<Eigen::Vector3d> prior;
-        if (!prior_in.is_none()) {
-          const auto a =
-              py::array_t<double, py::array::c_style |
-                                      py::array::forcecast>::ensure(prior_in);
-          if (!a || a.ndim() != 2 || a.shape(1) != 3)
-            throw py::value_error(
-                "prior: expected an (N, 3) array of directions toward the Sun "
-                "(NaN rows: none), or None");
-          const auto v = a.unchecked<2>();
-          for (py::ssize_t i = 0; i < a.shape(0); ++i)
-            prior.emplace_back(v(i, 0), v(i, 1), v(i, 2));
-        }
+        const std::vector<Eigen::Vector3d> prior =
+            prior_in.is_none() ? std::vector<Eigen::Vector3d>()
+                               : SunsArg(prior_in, "prior");
         SunPathResult r;
         {
           py::gil_scoped_release release;

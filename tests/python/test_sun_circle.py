@@ -63,3 +63,15 @@ def test_the_rounds_and_the_limit_come_from_cpp():
     # What the estimate's messages quote (finish.py) is the fit's own default.
     import _native
     assert sun_circle.min_frames() == _native.TrimmedCircleOptions().min_frames == 8
+
+
+def test_bad_arguments_name_themselves():
+    import _native
+    with pytest.raises(ValueError, match="suns_in_world: expected an \\(N, 3\\) array"):
+        _native.fit_sun_circle([1.0, 2.0], np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="weights: expected none or one per time"):
+        _native.fit_sun_circle([1.0, 2.0], np.ones((2, 3)), [1.0])
+    with pytest.raises(ValueError, match="floor_deg must be >= 0"):
+        _native.fit_trimmed_sun_circle([1.0, 2.0], np.ones((2, 3)), -1.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'iteration'"):
+        _native.fit_sun_circle([1.0, 2.0], np.ones((2, 3)), iteration=3)
