@@ -23,7 +23,9 @@ azimuths are scored in that north: a run's geographic azimuth plus the north
 offset it used (physical smoothing fits its own) minus the given one, so a
 fitted north that disagrees with the scene's costs azimuth. A line per run
 lists how the frames with the Sun below the horizon were flagged, and the
-north physical smoothing fitted.
+north physical smoothing fitted. Each clip's truth is written beside its
+tracks as DIR/<clip>.truth.sun.json (with the scene's north), for
+bench/sky_costs.py.
 """
 import argparse
 import csv
@@ -212,6 +214,9 @@ def main(argv=None):
         spec = CLIP_SPECS[clip]
         folder = folders[spec["footage"]]
         truth = truth_track(os.path.join(folder, f"{clip}.times.csv"), native.sun_position, spec)
+        # Kept for the sky's costs against it (bench/sky_costs.py TRUTH).
+        truth.north_offset_deg = spec.get("north_offset_deg") or 0.0
+        trackfile.write_track(os.path.join(args.out, f"{clip}.truth.sun.json"), truth)
         scored = truth if spec["min_elevation"] is None else sun_up(truth, spec["min_elevation"])
         blend = os.path.join(ROOT, "examples", "real", f"{clip}.blend")
         for method in args.methods:
