@@ -11,6 +11,9 @@ best direction's zenith against the true one, its azimuth's and its
 direction's distance from the true Sun's, and the cost of the true Sun's
 cell (0: as good as the best; 25.5: the cap). --out keeps every frame's
 costs and the grid's directions (numpy .npz: costs, directions).
+--north-scan also sums, for each north offset in 2 deg steps, the costs of
+the truth's Suns (those at least 4 deg up) turned into the scene by it: where
+the place and times are known, whether the evidence could tell north.
 """
 import argparse
 import json
@@ -31,6 +34,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(prog="sky_costs.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("truth", help="the scene's truth.sun.json (bench/suite.py's cache)")
     ap.add_argument("--out", help="write the costs and directions to this .npz")
+    ap.add_argument("--north-scan", action="store_true",
+                    help="sum the truth's costs for each north offset (2 deg steps)")
     args = ap.parse_args(argv)
     with open(args.truth) as f:
         truth = json.load(f)
@@ -81,6 +86,20 @@ def main() -> int:
         print(f"{frame:5d}  {int(np.sum(c < CAP)):9d}  {zen[best]:11.1f}  "
               f"{ft['zenith_deg']:11.1f}  {az_off:16.2f}  {off[best]:8.1f}  "
               f"{c[int(np.argmin(off))]:9.1f}")
+    if args.north_scan:
+        up = [(k, ft) for k, ft in enumerate(truth["frames"][:len(costs)])
+              if 90.0 - ft["zenith_deg"] >= 4.0]
+
+        def summed(offset):
+            return sum(float(costs[k][int(np.argmax(dirs @ np.asarray(
+                angles.sun_in_world_from_geographic(ft["zenith_deg"], ft["azimuth_deg"],
+                                                    offset))))]) for k, ft in up)
+        scan = sorted((summed(float(o)), o) for o in range(-180, 180, 2))
+        given = summed(north)
+        print(f"north scan over {len(up)} frames with the Sun >= 4 deg up: the truth's north "
+              f"{north:+.1f} sums {given:.1f}; best {scan[0][0]:.1f} at {scan[0][1]:+d}, "
+              f"worst {scan[-1][0]:.1f}; {sum(c < given for c, _ in scan)} of {len(scan)} "
+              f"offsets sum less")
     if args.out:
         np.savez(args.out, costs=costs, directions=dirs)
     return 0
