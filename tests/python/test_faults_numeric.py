@@ -100,3 +100,36 @@ def test_physical_fit_refuses_degenerate_inputs_with_a_reason():
 def test_zero_or_negative_seconds_per_frame_is_refused(seconds):
     with pytest.raises(ValueError, match="positive"):
         clock.frame_times(dt.datetime(2025, 6, 21, tzinfo=dt.timezone.utc), seconds, [1, 2])
+
+
+def test_the_sun_circle_fits_never_crash_and_never_succeed_with_nan_on_any_numbers():
+    """Times, Suns and weights drawn with NaN, infinities, zeros, huge values
+    and all-equal times: the native fits (C++ since issue 28) return a result
+    (any status) and a successful one has a finite Sun at every finite time.
+    In a child process: a crash there must fail the test, not end pytest."""
+    code = (
+        "import numpy as np, _native as nat\n"
+        "rng = np.random.default_rng(5)\n"
+        "odd = [np.nan, np.inf, -np.inf, 0.0, 1e300, -1e300, 1e-300]\n"
+        "bad = 0\n"
+        "for it in range(1500):\n"
+        "    n = int(rng.integers(0, 40))\n"
+        "    t, s, w = rng.normal(0, 1e4, n), rng.normal(0, 1, (n, 3)), rng.uniform(-0.5, 2, n)\n"
+        "    for _ in range(int(rng.integers(0, 4))):\n"
+        "        if n:\n"
+        "            t[rng.integers(0, n)] = odd[rng.integers(0, 7)]\n"
+        "            w[rng.integers(0, n)] = odd[rng.integers(0, 7)]\n"
+        "            s[rng.integers(0, n), rng.integers(0, 3)] = odd[rng.integers(0, 7)]\n"
+        "    if n and rng.random() < 0.2:\n"
+        "        t[:] = t[0]\n"
+        "    for r in (nat.fit_sun_circle(list(t), s, list(w), times_are_seconds=bool(it % 2)),\n"
+        "              nat.fit_trimmed_sun_circle(list(t), s, 1.0, list(w))):\n"
+        "        if r.status == nat.SunCircleStatus.SUCCESS:\n"
+        "            bad += not np.isfinite(r.sun_in_world[np.isfinite(t)]).all()\n"
+        "print(bad)\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ADDON, capture_output=True,
+                          text=True, timeout=120)
+    if "No module named '_native'" in proc.stderr:
+        pytest.skip("the native module is not built")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["0"], proc.stdout + proc.stderr

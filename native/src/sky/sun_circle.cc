@@ -193,8 +193,10 @@ SunCircleFit FitSunCircle(const std::vector<double>& times,
   std::vector<size_t> ok;
   for (size_t i = 0; i < n; ++i) {
     const double w = weights.empty() ? 1.0 : weights[i];
+    // A weight that is not a finite positive number leaves its Sun out (an
+    // infinite one made the whole fit NaN).
     if (suns_in_world[i].allFinite() && suns_in_world[i].norm() > 0 &&
-        std::isfinite(times[i]) && w > 0) {
+        std::isfinite(times[i]) && std::isfinite(w) && w > 0) {
       ok.push_back(i);
     }
   }

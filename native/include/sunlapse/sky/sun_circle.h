@@ -89,7 +89,7 @@ struct SunCircleFit {
 // times: one per Sun (seconds or frame numbers, as options say);
 // suns_in_world: directions toward the Sun (any length; a non-finite one: no
 // Sun at that time, predicted all the same); weights: empty (all 1) or one
-// per Sun (<= 0: left out).
+// per Sun (<= 0 or not finite: left out).
 SunCircleFit FitSunCircle(const std::vector<double>& times,
                           const std::vector<Eigen::Vector3d>& suns_in_world,
                           const std::vector<double>& weights,
