@@ -19,6 +19,13 @@ ADDON = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abs
                      "addon")
 
 
+def in_child(code, timeout=60):
+    """Runs Python `code` in a child process beside the add-on's modules: an
+    abort or a crash there fails the test instead of ending pytest."""
+    return subprocess.run([sys.executable, "-c", code], cwd=ADDON, capture_output=True,
+                          text=True, timeout=timeout)
+
+
 def test_two_pass_with_every_frame_at_one_time_gives_a_constant_not_an_abort():
     # A times file with a date-only column: every frame at the same second.
     code = (
@@ -31,8 +38,7 @@ def test_two_pass_with_every_frame_at_one_time_gives_a_constant_not_an_abort():
         "print(max(z) - min(z) < 1e-9 and abs(z[0] - 42) < 1e-9)\n"
         "z, a = smoothing.two_pass_directions([7] * 5, [40] * 5, [10, 11, 12, 13, 14], degree=3)\n"
         "print(all(v == v for v in z + a))\n")
-    proc = subprocess.run([sys.executable, "-c", code], cwd=ADDON, capture_output=True,
-                          text=True, timeout=60)
+    proc = in_child(code)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["True", "True", "True"], proc.stdout + proc.stderr
 
@@ -127,8 +133,7 @@ def test_the_sun_circle_fits_never_crash_and_never_succeed_with_nan_on_any_numbe
         "        if r.status == nat.SunCircleStatus.SUCCESS:\n"
         "            bad += not np.isfinite(r.sun_in_world[np.isfinite(t)]).all()\n"
         "print(bad)\n")
-    proc = subprocess.run([sys.executable, "-c", code], cwd=ADDON, capture_output=True,
-                          text=True, timeout=120)
+    proc = in_child(code, timeout=120)
     if "No module named '_native'" in proc.stderr:
         pytest.skip("the native module is not built")
     assert proc.returncode == 0, proc.stderr
