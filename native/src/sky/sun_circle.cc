@@ -47,20 +47,31 @@ Basis PoleBasis(double pole_zenith, double pole_azimuth) {
   return b;
 }
 
+Vector3d OnCircle(const Basis& b, double declination, double h) {
+  return std::cos(declination) * (std::cos(h) * b.e1 + std::sin(h) * b.e2) +
+         std::sin(declination) * b.p;
+}
+
 // The circle's parameters: pole zenith and azimuth, declination, the angle
 // about the pole at t = 0 (radians) and, when fitted, its rate per time unit.
 struct Circle {
   VectorXd params;
   double fixed_rate = kNaN;  // the rate when times are seconds
-  double Rate() const {
-    return std::isnan(fixed_rate) ? params[4] : fixed_rate;
+  // The rate of `trial` parameters (the fitted one, or the fixed one).
+  double RateOf(const VectorXd& trial) const {
+    return std::isnan(fixed_rate) ? trial[4] : fixed_rate;
+  }
+  // The Sun on the circle of `trial` parameters at each time.
+  std::vector<Vector3d> SunsAt(const VectorXd& trial,
+                               const std::vector<double>& t) const {
+    const Basis b = PoleBasis(trial[0], trial[1]);
+    const double rate = RateOf(trial);
+    std::vector<Vector3d> out(t.size());
+    for (size_t i = 0; i < t.size(); ++i)
+      out[i] = OnCircle(b, trial[2], trial[3] + rate * t[i]);
+    return out;
   }
 };
-
-Vector3d OnCircle(const Basis& b, double declination, double h) {
-  return std::cos(declination) * (std::cos(h) * b.e1 + std::sin(h) * b.e2) +
-         std::sin(declination) * b.p;
-}
 
 // The measured Suns and what the fit weighs them by.
 struct Measured {
@@ -71,13 +82,10 @@ struct Measured {
 
 VectorXd Residuals(const Circle& c, const VectorXd& params, const Measured& m,
                    const std::vector<double>& robust) {
-  const Basis b = PoleBasis(params[0], params[1]);
-  const double rate = std::isnan(c.fixed_rate) ? params[4] : c.fixed_rate;
+  const std::vector<Vector3d> suns = c.SunsAt(params, m.t);
   VectorXd r(3 * m.t.size());
   for (size_t i = 0; i < m.t.size(); ++i) {
-    const double root_w = std::sqrt(m.w[i] * robust[i]);
-    r.segment<3>(3 * i) =
-        (OnCircle(b, params[2], params[3] + rate * m.t[i]) - m.sun[i]) * root_w;
+    r.segment<3>(3 * i) = (suns[i] - m.sun[i]) * std::sqrt(m.w[i] * robust[i]);
   }
   return r;
 }
@@ -103,7 +111,7 @@ MatrixXd Jacobian(const Circle& c, const VectorXd& params, const Measured& m,
   const double sign = sz > 0 ? 1.0 : -1.0;
   const Basis b = PoleBasis(pz, pa);
   const double cd = std::cos(dec), sd = std::sin(dec);
-  const double rate = std::isnan(c.fixed_rate) ? params[4] : c.fixed_rate;
+  const double rate = c.RateOf(params);
   // d e1/d pz = sign p, d e2/d pz = 0, d p/d pz = -sign e1;
   // d e1/d pa = sign (-cz ca, cz sa, 0), d e2/d pa = sign (-sa, -ca, 0),
   // d p/d pa = sz (ca, -sa, 0).
@@ -290,14 +298,11 @@ SunCircleFit FitSunCircle(const std::vector<double>& times,
   // are skipped, and the fit ends when those weights hold too.
   bool settled = false;
   const auto angles_off = [&](const VectorXd& params) {
-    const Basis b = PoleBasis(params[0], params[1]);
-    const double r = std::isnan(c.fixed_rate) ? params[4] : c.fixed_rate;
+    const std::vector<Vector3d> suns = c.SunsAt(params, m.t);
     std::vector<double> ang(k);
     for (size_t i = 0; i < k; ++i) {
       // The chord in degrees-per-radian units (small-angle: the angle).
-      ang[i] =
-          (OnCircle(b, params[2], params[3] + r * m.t[i]) - m.sun[i]).norm() /
-          kRadPerDeg;
+      ang[i] = (suns[i] - m.sun[i]).norm() / kRadPerDeg;
     }
     return ang;
   };
@@ -341,7 +346,7 @@ SunCircleFit FitSunCircle(const std::vector<double>& times,
     }
   }
   const Basis b = PoleBasis(c.params[0], c.params[1]);
-  const double r = c.Rate();
+  const double r = c.RateOf(c.params);
   out.status = SunCircleFit::Status::kSuccess;
   out.latitude_deg = std::asin(std::clamp(b.p.z(), -1.0, 1.0)) / kRadPerDeg;
   out.declination_deg = c.params[2] / kRadPerDeg;
