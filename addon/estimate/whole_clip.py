@@ -201,6 +201,16 @@ PACE_SWITCH_FRAMES = 3
 # are not the Sun's where the path puts it (an engraved line, a dark
 # object): it is not counted as in sunlight (UNKNOWN) and gets the path.
 OFF_CIRCLE_UNLIT_DEG = 10.0
+# Without times, a segment the path jumped to between two others whose
+# Suns lie on one circle at one pace (at least EXCURSION_SIDE_FRAMES in
+# sunlight on either side, EXCURSION_INLIER_SHARE of them on it) is footage
+# the clip went on through, not a cut: where most of its Suns are further
+# than OFF_CIRCLE_UNLIT_DEG off that circle, its evidence is not the Sun's
+# and the path is chosen again without it. Fresh member trees9: the box in
+# a tree's unmodelled shade, frames 17-23 a segment of their own 118-127
+# deg off at the model rule's 0.41, between segments within 7 deg.
+EXCURSION_SIDE_FRAMES = 3
+EXCURSION_INLIER_SHARE = 0.75
 # With capture times and the place, a frame whose Sun the ephemeris puts
 # below the horizon has no direct sunlight, whatever its evidence (a night
 # frame's street lights and ambient shading gave a raw Sun 5 deg up on the
@@ -539,6 +549,8 @@ class _WholeClip:
         cuts = [] if self.times_s is not None else untimed.going_back(
             [r.sun_in_world if r.sunlight == Sunlight.YES else None
              for r in self.result.frames], self.starts)
+        for k in self.excursions():
+            ignored[k] = 1
         if any(ignored) or cuts:
             self.ignored = ignored
             for k in cuts:
@@ -917,6 +929,42 @@ class _WholeClip:
                 self.unlit(r, "the shadows on this frame are not where the Sun's path puts "
                               "them")
         self.anchor_in_sunlight()
+
+    def excursions(self) -> List[int]:
+        """Without times, the frame positions of each segment the path
+        jumped to and back from (EXCURSION_* above): the Suns of the
+        segments either side lie on one circle at one pace, so the clip
+        went on through it, and most of its own Suns are far off that
+        circle. Its evidence is then not the Sun's."""
+        if self.times_s is not None or self.fit_circle is None:
+            return []
+        frames, b = self.result.frames, self.bounds
+        out: List[int] = []
+        for s in range(1, len(b) - 2):
+            lo, hi = b[s], b[s + 1]
+            if self.known_starts[lo] or self.known_starts[hi]:
+                continue
+            span = range(b[s - 1], b[s + 2])
+            lit = [k for k in span if frames[k].sunlight == Sunlight.YES and
+                   frames[k].sun_in_world is not None]
+            before = [k for k in lit if k < lo]
+            after = [k for k in lit if k >= hi]
+            inside = [k for k in lit if lo <= k < hi]
+            if min(len(before), len(after)) < EXCURSION_SIDE_FRAMES or not inside:
+                continue
+            around = set(before + after)
+            fit = self.fit_circle(
+                [float(self.frames[k]) for k in span],
+                [frames[k].sun_in_world if k in around else None for k in span],
+                CIRCLE_INLIER_FLOOR_DEG,
+                [max(frames[k].confidence, 1e-3) for k in span], times_are_seconds=False)
+            if not fit.success or len(fit.inliers) < EXCURSION_INLIER_SHARE * len(around):
+                continue
+            off = [angles.angle_between_deg(frames[k].sun_in_world,
+                                            fit.sun_in_world[k - span.start]) for k in inside]
+            if 2 * sum(o > OFF_CIRCLE_UNLIT_DEG for o in off) > len(off):
+                out.extend(range(lo, hi))
+        return out
 
     def unexplained_jumps(self) -> List[int]:
         """Frames after a segment bound the caller's times do not explain."""

@@ -843,3 +843,25 @@ def test_the_pace_clock_of_a_sun_that_stands_still_is_the_frame_numbers():
     frozen = [sun(40.0, 150.0)] * 140 + [sun(40.0 - 0.5 * k, 150.0 + 0.8 * k) for k in range(60)]
     clock = untimed.pace_clock(frozen, list(range(1, n + 1)), [0] * n)
     assert clock is None or all(math.isfinite(c) for c in clock)
+
+
+def test_a_stretch_whose_shadows_are_not_the_suns_is_not_a_cut(world):
+    """Frames in the middle of an untimed clip whose shadows point the other
+    way (an unmodelled tree's shade over the casters: fresh member trees9)
+    made a segment of their own that the path jumped to and back from, 118-127
+    deg off. The segments either side lie on one circle at one pace: the
+    clip went on through those frames, and their Suns are not the Sun's."""
+    n, lo, hi = 30, 12, 18
+    truth = [path(k, n) for k in range(n)]
+
+    def shown(k):
+        z, a = angles.angles_from_sun_in_world(truth[k])
+        return sun(z, a + 180.0) if lo <= k < hi else truth[k]
+    frames = [draw(world, shown(k), k) for k in range(n)]
+    result = run(world, frames, None, sun_circle.fit_trimmed)
+    assert result.jumps == [] and len(result.segments) == 1, result.segments
+    for k, r in enumerate(result.frames):
+        if r.sun_in_world is not None:
+            assert error_deg(r.sun_in_world, truth[k]) < (10.0 if lo <= k < hi else 1.0), k
+    # Without the circle (no fit given) nothing tells the stretch from a cut.
+    assert run(world, frames).jumps == [lo + 1, hi + 1]
