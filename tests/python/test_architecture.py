@@ -154,6 +154,9 @@ NOT_COPIES = {
                                        "largest step in degrees",
     "estimate.whole_clip.PACE_SWITCH_FRAMES": "Suns far off a circle, not the frames a "
                                               "stream queues",
+    "estimate.whole_clip.EXCURSION_SIDE_FRAMES": "sunlit frames either side of a jumped-to "
+                                                 "segment, not a stream's queue or a "
+                                                 "sample's sides",
 }
 
 
