@@ -11,6 +11,7 @@
 
 #include <ceres/ceres.h>
 #include <ceres/cubic_interpolation.h>
+#include <tbb/parallel_for.h>
 #include <opencv2/imgproc.hpp>
 
 #include "sunlapse/common/angles.h"
@@ -211,41 +212,57 @@ cv::Mat StableEdges(const std::vector<cv::Mat>& frames,
   const double brightest = *std::max_element(levels.begin(), levels.end());
   if (!(brightest > 0)) return cv::Mat();
   const cv::Size size = usable.front()->size();
-  std::vector<cv::Mat> magnitudes;
-  cv::Mat jxx = cv::Mat::zeros(size, CV_32F), jxy = jxx.clone(),
-          jyy = jxx.clone();
-  for (size_t i = 0; i < usable.size(); ++i) {
-    if (levels[i] < o.min_level_fraction * brightest) continue;
-    // Log intensity: an edge between two faces keeps its strength when the
-    // exposure or the Sun's strength changes.
-    cv::Mat logi;
-    cv::max(*usable[i], 0.0, logi);
-    logi += 0.25 * std::max(levels[i], 1e-12);
-    cv::log(logi, logi);
-    cv::GaussianBlur(logi, logi, cv::Size(0, 0), 1.0);
-    cv::Mat gx, gy, mag;
-    cv::Sobel(logi, gx, CV_32F, 1, 0, 3, 0.125);
-    cv::Sobel(logi, gy, CV_32F, 0, 1, 3, 0.125);
-    cv::magnitude(gx, gy, mag);
-    magnitudes.push_back(mag);
-    jxx += gx.mul(gx);
-    jxy += gx.mul(gy);
-    jyy += gy.mul(gy);
+  std::vector<size_t> lit;
+  for (size_t i = 0; i < usable.size(); ++i)
+    if (levels[i] >= o.min_level_fraction * brightest) lit.push_back(i);
+  if (lit.size() < 2) return cv::Mat();
+  // The frames on every core (the estimate waits for this stage): each
+  // frame's gradient magnitude, and the structure tensor summed over a
+  // fixed share of the frames per task, so that the sums (and the edges)
+  // are the same whatever the cores.
+  constexpr size_t kShares = 4;
+  std::vector<std::array<cv::Mat, 3>> sums(kShares);
+  std::vector<cv::Mat> magnitudes(lit.size());
+  tbb::parallel_for(size_t(0), kShares, [&](size_t share) {
+    std::array<cv::Mat, 3>& j = sums[share];
+    for (cv::Mat& m : j) m = cv::Mat::zeros(size, CV_32F);
+    for (size_t f = share; f < lit.size(); f += kShares) {
+      const size_t i = lit[f];
+      // Log intensity: an edge between two faces keeps its strength when
+      // the exposure or the Sun's strength changes.
+      cv::Mat logi;
+      cv::max(*usable[i], 0.0, logi);
+      logi += 0.25 * std::max(levels[i], 1e-12);
+      cv::log(logi, logi);
+      cv::GaussianBlur(logi, logi, cv::Size(0, 0), 1.0);
+      cv::Mat gx, gy;
+      cv::Sobel(logi, gx, CV_32F, 1, 0, 3, 0.125);
+      cv::Sobel(logi, gy, CV_32F, 0, 1, 3, 0.125);
+      cv::magnitude(gx, gy, magnitudes[f]);
+      j[0] += gx.mul(gx);
+      j[1] += gx.mul(gy);
+      j[2] += gy.mul(gy);
+    }
+  });
+  cv::Mat jxx = sums[0][0], jxy = sums[0][1], jyy = sums[0][2];
+  for (size_t share = 1; share < kShares; ++share) {
+    jxx += sums[share][0];
+    jxy += sums[share][1];
+    jyy += sums[share][2];
   }
-  if (magnitudes.size() < 2) return cv::Mat();
   const int k = static_cast<int>(magnitudes.size());
   cv::Mat median(size, CV_32F);
-  std::vector<float> v(k);
-  for (int y = 0; y < size.height; ++y) {
+  tbb::parallel_for(0, size.height, [&](int y) {
+    std::vector<float> v(k);
     float* out = median.ptr<float>(y);
     for (int x = 0; x < size.width; ++x) {
       for (int i = 0; i < k; ++i) v[i] = magnitudes[i].at<float>(y, x);
       out[x] = MedianInPlace(&v);
     }
-  }
+  });
   cv::Mat edges = cv::Mat::zeros(size, CV_8U);
   const int top = std::min(o.ignore_top_rows, size.height);
-  for (int y = std::max(1, top); y < size.height - 1; ++y) {
+  tbb::parallel_for(std::max(1, top), size.height - 1, [&](int y) {
     for (int x = 1; x < size.width - 1; ++x) {
       const float m = median.at<float>(y, x);
       if (m < o.min_log_gradient) continue;
@@ -258,7 +275,7 @@ cv::Mat StableEdges(const std::vector<cv::Mat>& frames,
           m > Bilinear(median, x - dx, y - dy))
         edges.at<uint8_t>(y, x) = 255;
     }
-  }
+  });
   return edges;
 }
 
@@ -515,6 +532,37 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
   };
   std::vector<double> before, after;
   out.distance_before_px = distances(&before);
+  // An object's account before any correction, and the result's sentence.
+  auto unrefined = [&](size_t k) {
+    ObjectCorrection c;
+    c.object_id = ids[k];
+    c.pivot_in_world = frames[k].pivot;
+    c.axis_in_world = frames[k].axes.col(0);
+    c.points = count[k];
+    c.distance_before_px = before[k];
+    return c;
+  };
+  auto said = [&]() {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << out.points << " edge points of the model, " << out.distance_before_px
+        << " px from the clip's edges on average";
+    return msg.str();
+  };
+  if (out.distance_before_px < o.min_distance_before_px) {
+    // The model already fits: whatever the fit found would not be used
+    // (below), so it is not run. Most models are, and the fit is most of
+    // the stage's time (0.53 of 0.88 s on the 1080p bench clip).
+    for (size_t k = 0; k < frames.size(); ++k) {
+      if (count[k] == 0) continue;
+      out.objects.push_back(unrefined(k));
+      out.objects.back().distance_after_px = before[k];
+    }
+    out.distance_after_px = out.distance_before_px;
+    out.status = ModelRefineResult::Status::kUnchanged;
+    out.message = said() + "; the model already fits the clip";
+    return out;
+  }
 
   // Each object starts from its best move on a grid over the bounds (a
   // chamfer search): the continuous fit alone stops at the nearest edges,
@@ -526,9 +574,12 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
       if (of[k].empty()) continue;
       const double sigma = frames[k].move_sigma_m, step = 0.25 * sigma;
       const int n = static_cast<int>(std::floor(frames[k].max_move_m / step));
-      double best = std::numeric_limits<double>::infinity();
-      std::array<double, 6> q = params[k], chosen = params[k];
-      for (int i = -n; i <= n; ++i) {
+      // Each row of the grid on any core; the first best move in the
+      // grid's order is taken, as one core would.
+      const int side = 2 * n + 1;
+      std::vector<double> costs(static_cast<size_t>(side) * side);
+      tbb::parallel_for(-n, n + 1, [&](int i) {
+        std::array<double, 6> q = params[k];
         for (int j = -n; j <= n; ++j) {
           q[0] = i * step;
           q[1] = j * step;
@@ -541,9 +592,21 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
             cost += std::log1p(r * r);  // the Cauchy loss
           }
           // The prior on the move, as the fit weighs it.
-          cost =
+          costs[static_cast<size_t>(i + n) * side + (j + n)] =
               0.5 * cost + 0.5 * (q[0] * q[0] + q[1] * q[1]) / (sigma * sigma);
-          if (cost < best) best = cost, chosen = q;
+        }
+      });
+      double best = std::numeric_limits<double>::infinity();
+      std::array<double, 6> chosen = params[k];
+      for (int i = -n; i <= n; ++i) {
+        for (int j = -n; j <= n; ++j) {
+          const double cost =
+              costs[static_cast<size_t>(i + n) * side + (j + n)];
+          if (cost < best) {
+            best = cost;
+            chosen[0] = i * step;
+            chosen[1] = j * step;
+          }
         }
       }
       params[k] = chosen;
@@ -604,13 +667,8 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
   out.camera.turn_deg = angle / kRadPerDeg;
   out.camera.focal_factor = std::exp(cam[3]);
   for (size_t k = 0; k < frames.size(); ++k) {
-    ObjectCorrection c;
-    c.object_id = ids[k];
-    c.pivot_in_world = frames[k].pivot;
-    c.axis_in_world = frames[k].axes.col(0);
-    c.points = count[k];
+    ObjectCorrection c = unrefined(k);
     c.refined = confirmed[k];
-    c.distance_before_px = before[k];
     c.distance_after_px = after[k];
     if (c.refined) {
       const auto& q = params[k];
@@ -624,18 +682,13 @@ ModelRefineResult RefineModel(const Scene& scene, const Camera& camera,
       1.0 - out.distance_after_px / std::max(out.distance_before_px, 1e-300);
   std::ostringstream msg;
   msg.precision(3);
-  msg << out.points << " edge points of the model, " << out.distance_before_px
-      << " px from the clip's edges on average, " << out.distance_after_px
-      << " px refined";
+  msg << said() << ", " << out.distance_after_px << " px refined";
   const int kept =
       static_cast<int>(std::count(confirmed.begin(), confirmed.end(), true));
   if (kept == 0) {
     out.status = ModelRefineResult::Status::kUnchanged;
     msg << "; no object's edges are confirmed by the clip's";
     out.camera = CameraCorrection();
-  } else if (out.distance_before_px < o.min_distance_before_px) {
-    out.status = ModelRefineResult::Status::kUnchanged;
-    msg << "; the model already fits the clip";
   } else if (drop < o.min_distance_drop) {
     out.status = ModelRefineResult::Status::kUnchanged;
     msg << "; not better enough to be used";

@@ -234,6 +234,35 @@ TEST(RefineModel, LeavesATrueModelWhereTheClipShowsIt) {
   EXPECT_LT(r.camera.turn_deg, 0.5);
 }
 
+// A model already within min_distance_before_px of the clip's edges is not
+// fitted at all (its corrections would not be used): each object in view is
+// accounted for, uncorrected, and the status says so.
+TEST(RefineModel, DoesNotFitAModelThatAlreadyFits) {
+  const testing::Mesh truth = testing::BoxAndPole();
+  const Scene scene = truth.Build();
+  const Camera camera = TrueCamera();
+  const cv::Mat edges = StableEdges(Frames(scene, camera, 9));
+  ModelRefineOptions o = Loose();
+  o.min_distance_before_px = 4.0;  // this model is within it
+  const ModelRefineResult r = RefineModel(scene, camera, {0}, edges, o);
+  ASSERT_EQ(r.status, ModelRefineResult::Status::kUnchanged) << r.message;
+  EXPECT_NE(r.message.find("already fits"), std::string::npos) << r.message;
+  EXPECT_EQ(r.distance_after_px, r.distance_before_px);
+  EXPECT_EQ(r.camera.turn_deg, 0.0);
+  ASSERT_EQ(r.objects.size(), 2u);
+  for (const auto& c : r.objects) {
+    EXPECT_FALSE(c.refined);
+    EXPECT_GT(c.points, 0);
+    EXPECT_EQ(c.move_in_world_m.norm(), 0.0);
+  }
+  // Asked to fit it anyway, the fit runs and moves something.
+  o.min_distance_before_px = 0.0;
+  const ModelRefineResult fitted = RefineModel(scene, camera, {0}, edges, o);
+  EXPECT_EQ(fitted.message.find("already fits"), std::string::npos)
+      << fitted.message;
+  EXPECT_NE(fitted.distance_after_px, fitted.distance_before_px);
+}
+
 // The corrections of object `id` (none when it was not in view).
 const ObjectCorrection* CorrectionOf(const ModelRefineResult& r, int id) {
   for (const auto& c : r.objects)
@@ -252,6 +281,9 @@ TEST(RefineModel, MovesASmallObjectByAtMostAFractionOfItsSize) {
   const cv::Mat edges = StableEdges(Frames(truth.Build(), camera, 9));
   ModelRefineOptions o = Loose();
   o.max_move_m = o.move_sigma_m = 1.0;  // the metres alone would let it go back
+  // One small object off among true ones: the model fits on average (the
+  // gate); fitted anyway, to see how far the cube may go.
+  o.min_distance_before_px = 0.0;
   ModelRefineOptions wide = o;
   wide.max_move_fraction = wide.move_sigma_fraction = 10.0;
   const ObjectCorrection* free =
