@@ -14,8 +14,9 @@ fitted on the frames with some support (support 0 stays 0) of the clips it
 applies to. Frames whose support is below calibration.DOUBTED_SUPPORT are
 then held below 0.5, and so is every frame of a clip whose Sun was measured
 on too few of the frames that could show it, or whose model's shadows do not
-fit the footage (calibration.clip_doubted; the suite's measured_share and
-model_misfit, from the track's sun_measured_share and model_misfit).
+fit the footage or the clip refined it (calibration.clip_doubted; the
+suite's measured_share, model_misfit and model_refined, from the track's
+sun_measured_share, model_misfit and model_refinement).
 
 Printed: the reliability table and expected calibration error (ECE, 10
 bins) of the support as it is; the same of the map applied to scenes it was
@@ -69,9 +70,10 @@ def scenes_from(paths):
                 key = f"{smoothing}:{row['scene']}"
                 scenes.setdefault(key, []).extend(frames)
                 share = row.get("measured_share")
+                refined = bool(row.get("model_refined"))
                 doubted[key] = share is not None and calibration.clip_doubted(
-                    share, row.get("model_misfit"))
-                model[key] = calibration.model_doubted(row.get("model_misfit"))
+                    share, row.get("model_misfit"), refined)
+                model[key] = calibration.model_doubted(row.get("model_misfit"), refined)
     if not scenes:
         fail("no scored frames in " + ", ".join(paths))
     return scenes, doubted, model

@@ -313,6 +313,8 @@ def score(key, folder, track_path, wall_s, error):
                # clip rules).
                measured_share=(track.extra or {}).get("sun_measured_share"),
                model_misfit=(track.extra or {}).get("model_misfit"),
+               model_refined=bool(((track.extra or {}).get("model_refinement") or {})
+                                  .get("used")),
                zenith_bias=zenith_bias(rep))
 
     # Every frame must be estimated: a missing frame fails the scene. The

@@ -86,6 +86,11 @@ def _physical(native, track, numbers, raws, options, north):
     return (fit.zenith_deg, fit.azimuth_deg), fit.north_offset_deg
 
 
+# Why a clip's model is doubted (calibration.model_doubted), by whether the
+# clip refined it.
+_MODEL_DOUBT = {False: "does not fit the footage", True: "was refined by the clip"}
+
+
 def finish(native, track: trackfile.Track, raws: List[RawSun], options: EstimateOptions,
            times, progress, segments: Sequence[Sequence[int]], pixel_scale: float = 1.0,
            circle: Optional[Dict[int, Tuple[float, float]]] = None,
@@ -140,8 +145,15 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     ) if options.method == "default" else None  # the thesis's tracker measures none
     if misfit is not None:
         track.extra["model_misfit"] = round(misfit, 4)
-    model_off = calibration.model_doubted(misfit)
-    if model_off:
+    refined = bool((track.extra.get("model_refinement") or {}).get("used"))
+    model_off = calibration.model_doubted(misfit, refined)
+    if refined and not calibration.model_doubted(misfit):
+        track.report("model", trackfile.ProblemKind.HINT,
+                     "the clip refined a hand-made model (see model_refinement); what it "
+                     "could not see of the model (a caster's height, an object whose edges "
+                     "the footage does not show) still biases every frame's Sun alike. Check "
+                     "the casters' places and sizes against the footage")
+    elif model_off:
         # Shadows the model does not cast (notes.note_unmodelled_shadows,
         # reported before this) also leave the model's shadows missing the
         # footage's: that hint is kept, as a cause.
@@ -168,7 +180,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"well, so no frame's confidence reaches 0.5")
     elif model_doubted:
         track.report("confidence", trackfile.ProblemKind.FELL_BACK,
-                     f"the model does not fit the footage (see the model's hint), so no "
+                     f"the model {_MODEL_DOUBT[refined]} (see the model's hint), so no "
                      f"frame's confidence goes above {calibration.MODEL_DOUBTED_PROBABILITY:.2f} "
                      f"(the share of such frames within 2 deg on the test scenes)")
 

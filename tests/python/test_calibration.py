@@ -285,6 +285,35 @@ def test_a_clip_whose_model_does_not_fit_its_footage_stays_below_one_half_and_sa
     assert back.frames[5].sun_height_pinned_deg == 90.0
 
 
+def test_a_clip_whose_model_the_clip_refined_stays_below_one_half_and_says_why():
+    """A model the clip had to refine was made by hand; what the refinement
+    cannot see of it still biases every frame (held-out rough10: refined,
+    misfit 0.054, 25 frames more than 5 deg off at 0.9 and more)."""
+    assert calibration.model_doubted(None, refined=True)
+    assert calibration.model_doubted(0.0, refined=True)
+    assert calibration.clip_doubted(1.0, 0.0, refined=True)
+
+    def finished(used):
+        raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97,
+                       sunlight=trackfile.Sunlight.YES, tracked=_Tracked(0.01))
+                for f in range(1, 11)]
+        track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                        "smoothing": "two_pass"})
+        track.extra["model_refinement"] = {"used": used, "message": "m"}
+        finish.finish(None, track, raws, estimate_options.EstimateOptions(refine_model=True),
+                      None, None, [[r.frame for r in raws]])
+        return track
+    kept = finished(False)
+    assert kept.problem("model") is None and kept.problem("confidence") is None
+    assert all(f.confidence > 0.9 for f in kept.frames)
+    refined = finished(True)
+    cap = calibration.MODEL_DOUBTED_PROBABILITY
+    assert [f.confidence for f in refined.frames] == [pytest.approx(cap)] * 10
+    hint = refined.problem("model")
+    assert hint is not None and "refined" in hint.message and "caster" in hint.message
+    assert "refined by the clip" in refined.problem("confidence").message
+
+
 def test_shadows_the_model_does_not_cast_stay_named_when_the_model_misfits():
     """A tree's shadow over the ground (not in the model) makes the model's
     shadows miss the footage's as a misplaced caster does: the hint about
