@@ -89,13 +89,19 @@ def build_parser():
     p.add_argument("--initial-sun", nargs=2, type=float, metavar=("ZENITH", "AZIMUTH"),
                    help="start from this Sun on the first frame instead of estimating it "
                         "(degrees, azimuth as in the track file); for measuring the tracker")
-    p.add_argument("--refine-model", action="store_true",
-                   help="refine the hand-made model by the clip first: each object moved, "
-                        "turned and scaled and the camera turned and zoomed so that the "
-                        "model's edges fall on the footage's; the estimate uses the refined "
-                        "model and the track lists the corrections (the .blend is not changed)")
+    refine = p.add_mutually_exclusive_group()
+    refine.add_argument("--refine-model", dest="refine_model", action="store_true",
+                        default=None,
+                        help="refine the hand-made model by the clip first (the default, "
+                             "unless the scene's Refine Model is off): each object moved, "
+                             "turned and scaled and the camera turned and zoomed so that the "
+                             "model's edges fall on the footage's; used only where the model "
+                             "is clearly off, and then every frame's confidence stays below "
+                             "0.5; the track lists the corrections (the .blend is not changed)")
+    refine.add_argument("--no-refine-model", dest="refine_model", action="store_false",
+                        default=None, help="use the model as it is, without the refinement")
     p.add_argument("--apply-model-corrections", action="store_true",
-                   help="with --refine-model: apply the corrections the estimate used to the "
+                   help="apply the corrections the estimate used to the "
                         "objects and camera of the open .blend (kept with --save, used by "
                         "--render-ar); objects that keys, drivers or constraints move are "
                         "left as they are")
@@ -162,9 +168,11 @@ def check_flags(args):
     if args.refine_model and args.method == "thesis":
         fail(EXIT_USAGE, "--refine-model refines the model for the default method; the thesis "
                          "baseline (--method thesis) runs on the model as it is")
-    if args.apply_model_corrections and not args.refine_model:
-        fail(EXIT_USAGE, "--apply-model-corrections needs --refine-model (the corrections "
-                         "come from refining the model by the clip)")
+    if args.apply_model_corrections and (args.refine_model is False
+                                         or args.method == "thesis"):
+        fail(EXIT_USAGE, "--apply-model-corrections needs the model refined by the clip "
+                         "(the default method without --no-refine-model): the corrections "
+                         "come from that refinement")
     if args.initial_sun:
         z, a = args.initial_sun
         if not (math.isfinite(z) and 0 <= z < 90):
@@ -411,7 +419,8 @@ def _run(argv, interrupt):
         if args.initial_sun:
             options.initial_sun = tuple(args.initial_sun)
         options.calibrated_confidence = not args.uncalibrated_confidence
-        options.refine_model = args.refine_model or options.refine_model
+        if args.refine_model is not None:  # else the scene's Refine Model
+            options.refine_model = args.refine_model
         interrupt.check()
         # Flushed: a wrapper (or a test) waiting for the work to start sees it.
         print(f"sunlapse: estimating frames {numbers[0]}-{numbers[-1]} of clip '{clip.name}' "

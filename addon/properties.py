@@ -85,7 +85,7 @@ class SunlapseSettings(bpy.types.PropertyGroup):
                     "sub-seconds) and GPS position from its EXIF data when no times file "
                     "is given")
     refine_model: BoolProperty(
-        name="Refine Model", default=False,
+        name="Refine Model", default=True,
         description="Before the estimate, move, turn and scale each modelled object and "
                     "turn and zoom the camera so that the model's edges fall on the "
                     "footage's (a fixed camera; used only where the model is clearly off). "

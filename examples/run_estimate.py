@@ -9,7 +9,8 @@ Contract (the accuracy benchmarks call it exactly so; extend, never break):
       [--times CSV] [--latitude DEG] [--longitude DEG] [--date YYYY-MM-DD] \
       [--start-time HH:MM[:SS]] [--utc-offset HOURS] [--frame-seconds S] \
       [--fit-latitude | --fixed-latitude] [--initial-sun ZENITH AZIMUTH]
-      [--uncalibrated-confidence] [--refine-model [--apply-model-corrections]]
+      [--uncalibrated-confidence] [--refine-model | --no-refine-model]
+      [--apply-model-corrections]
 
 Flags:
   --out TRACK.json      the track file to write (*.sun.json; docs/track-format.md)
@@ -51,22 +52,27 @@ Flags:
                         2 deg, which is the default; for refitting that
                         calibration (bench/calibrate.py). The track's
                         method.confidence says which one a file holds
-  --refine-model        refine the hand-made model by the clip first (static
-                        cameras; the default method only): each object in
-                        view moved, turned and scaled, the camera turned and
-                        zoomed, so that the model's edges fall on the
-                        edges that stay put in the footage; used only where
-                        the model is clearly off and the fit clearly puts it
-                        back. The estimate uses
-                        the refined model; the track's extra.model_refinement
-                        lists each correction (object_id indexes
+  --refine-model        refine the hand-made model by the clip first (the
+                        default, unless the scene's Refine Model is off;
+                        static cameras and the default method only): each
+                        object in view moved, turned and scaled, the camera
+                        turned and zoomed, so that the model's edges fall on
+                        the edges that stay put in the footage; used only
+                        where the model is clearly off and the fit clearly
+                        puts it back. The estimate then uses the refined
+                        model, keeps every frame's confidence below 0.5 (a
+                        hand-made model's remaining error biases every frame)
+                        and says so; the track's extra.model_refinement lists
+                        each correction (object_id indexes
                         method.options.model_objects). The .blend is not
                         changed
+  --no-refine-model     use the model as it is, without the refinement
   --apply-model-corrections
-                        with --refine-model: apply those corrections to the
-                        open .blend's objects and camera (kept with --save,
-                        used by --render-ar); objects moved by keys, drivers
-                        or constraints are left as they are and named
+                        apply the corrections the estimate used to the open
+                        .blend's objects and camera (kept with --save, used
+                        by --render-ar); objects moved by keys, drivers or
+                        constraints are left as they are and named; a note
+                        says when the clip left the model as it was
 
 Clip, camera and model come from the .blend (active clip, scene camera) unless
 given. On failure it prints one line "sunlapse: error: <reason>" on stderr and

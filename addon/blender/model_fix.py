@@ -21,6 +21,9 @@ def apply_corrections(context, track: Track) -> Tuple[str, List[str]]:
     each). Raises ValueError when the track has none to apply, or they were
     applied already."""
     c = model_corrections.corrections_of(track)
+    if c is None and "model_refinement" in track.extra:
+        raise ValueError("The clip left the model as it was (the estimate used it as "
+                         "modelled): there are no model corrections to apply")
     if c is None:
         raise ValueError("The track holds no model corrections: run the estimate with "
                          "Refine Model on (--refine-model); corrections are kept only where "

@@ -88,8 +88,10 @@ class EstimateOptions:
     # Refine the hand-made model by the clip before the estimate (native
     # refine_model): each object moved, turned and scaled, the camera turned
     # and zoomed, so that the model's edges fall on the clip's stable edges.
-    # The estimate uses the refined model; the track reports the corrections.
-    refine_model: bool = False
+    # The estimate uses the refined model where the gate lets it (a model
+    # clearly off); the track reports the corrections. A model that already
+    # fits costs the stable edges only (docs/performance.md).
+    refine_model: bool = True
 
     def check(self) -> None:
         """Raises EstimateError naming the first option that cannot be."""

@@ -477,6 +477,7 @@ class _WholeClip:
                  clock_elevation_deg=None, frame_cameras=None, refine_model=False):
         self.native, self.scene, self.camera = native, scene, camera
         self.refine_model = refine_model
+        self.refine_s: Optional[float] = None  # the model's refinement, when asked
         self.frames, self.n = list(frames), len(frames)
         self.read_gray, self.stream, self.source = read_gray, stream, source
         self.ground_ids, self.times_s = list(ground_object_ids), times_s
@@ -607,7 +608,7 @@ class _WholeClip:
         map beside the reference decoding (ShadowTracker.prepare). Returns
         the reference frames that are frames of a short run, kept for the
         pass ({frame: gray}), or None when no frame could be read."""
-        native, frames = self.native, self.frames
+        frames = self.frames
         wanted_reference = [frames[i] for i in notes.spread(list(range(self.n)), REFERENCE_FRAMES)]
         size = (self.work.width, self.work.height)
         # Reference frames need not be exact: the key frame before each
@@ -620,21 +621,8 @@ class _WholeClip:
             ((f, self.reduced(self.read_gray(f), f)) for f in wanted_reference)
             if self.stream is None else self.stream(wanted_reference, near, size))
         independent = getattr(reference_frames, "frames_independent", False)
-        if self.refine_model:
-            # The model is refined before anything is cast from it: the
-            # reference frames are all decoded first (the table no longer
-            # overlaps their decoding).
-            reference_frames = list(reference_frames)
-            self.refine_model_by_clip([_frame(image) for _, image in reference_frames])
-            self.mark("refine")
-        opts = native.SkyEvidenceOptions()
-        opts.ignore_top_rows = self.top
-        self.sky = native.SkyEvidence(self.scene, self.work, opts)
+        self.cast_from_model()
         self.mark("table")
-        # The tracker's ground map needs the scene and the camera only: it is
-        # made on the other core while a movie's key frames decode on one.
-        self.tracker = native.ShadowTracker(self.scene, self.work, self.ground_ids,
-                                            ignore_top_rows=self.top)
         reference: List[Optional[np.ndarray]] = []
         kept: Dict[int, np.ndarray] = {}
         budget = REFERENCE_KEEP_BYTES if self.n <= SHORT_CLIP_FRAMES or independent else 0
@@ -648,8 +636,19 @@ class _WholeClip:
                 reference.append(gray)
                 if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
                     kept[f], budget = gray, budget - gray.nbytes
-            used = self.sky.set_reference(reference)
+            if not self.refine_model:
+                used = self.sky.set_reference(reference)
             prepared.result()
+        if self.refine_model:
+            # Refined on the reference frames once decoded; the table was
+            # cast from the user's model meanwhile, and is cast again (with
+            # the tracker's map) only where the refined model is used.
+            started = time.perf_counter()
+            if self.refine_model_by_clip(reference):
+                self.cast_from_model()
+                self.tracker.prepare()
+            used = self.sky.set_reference(reference)
+            self.refine_s = time.perf_counter() - started
         self.frames_read = len(reference)
         self.mark("reference")
         if used == 0:
@@ -659,25 +658,38 @@ class _WholeClip:
             return None
         return kept
 
-    def refine_model_by_clip(self, grays: List[Optional[np.ndarray]]) -> None:
+    def cast_from_model(self) -> None:
+        """The sky's visibility table and the tracker, from the model."""
+        opts = self.native.SkyEvidenceOptions()
+        opts.ignore_top_rows = self.top
+        self.sky = self.native.SkyEvidence(self.scene, self.work, opts)
+        # The tracker's ground map needs the scene and the camera only: it is
+        # made on the other core while a movie's key frames decode on one.
+        self.tracker = self.native.ShadowTracker(self.scene, self.work, self.ground_ids,
+                                                 ignore_top_rows=self.top)
+
+    def refine_model_by_clip(self, grays: List[Optional[np.ndarray]]) -> bool:
         """The hand-made model and the camera refined so that the model's
         edges fall on the edges that stay put over the reference frames
         (native refine_model); the estimate then runs on the refined model.
-        A moving camera's model is left as it is (its views are solved)."""
+        A moving camera's model is left as it is (its views are solved).
+        Returns whether the estimate is to use the refined model."""
         native = self.native
         if self.view is not None:
             self.result.model_refinement_note = "not refined: the camera moves"
-            return
+            return False
         edges = native.stable_edges(grays, options=native.StableEdgesOptions(
             ignore_top_rows=self.top))
         if edges is None:
             self.result.model_refinement_note = "not refined: fewer than two frames to see it in"
-            return
+            return False
         refined = native.refine_model(self.scene, self.work, self.ground_ids, edges)
         self.result.model_refinement = refined
-        if refined.status == native.ModelRefineStatus.REFINED:
-            self.scene = self.result.refined_scene = native.corrected_scene(self.scene, refined)
-            self.work = native.corrected_camera(self.work, refined.camera)
+        if refined.status != native.ModelRefineStatus.REFINED:
+            return False
+        self.scene = self.result.refined_scene = native.corrected_scene(self.scene, refined)
+        self.work = native.corrected_camera(self.work, refined.camera)
+        return True
 
     def clip_pass(self, kept: Dict[int, np.ndarray]) -> None:
         """The pass over the clip, in native code without Python's lock:
@@ -1115,11 +1127,9 @@ class _WholeClip:
 
     def timing(self) -> dict:
         c, n = self.clock, self.n
-        # Refining the model first, the reference frames are decoded before
-        # the table is cast: refine_s holds their decoding and the fit.
-        refine = c.get("refine", 0.0)
-        return {"table_s": c["table"] - refine, "reference_s": c["reference"] - c["table"],
-                **({"refine_s": refine} if "refine" in c else {}),
+        refine = self.refine_s or 0.0
+        return {"table_s": c["table"], "reference_s": c["reference"] - c["table"] - refine,
+                **({"refine_s": refine} if self.refine_s is not None else {}),
                 "evidence_ms_per_frame": 1000.0 * (c["evidence"] - c["reference"]) / max(1, n),
                 "tracking_ms_per_frame": 1000.0 * self.tracking_s / max(1, n),
                 "tracker_start_s": self.done.start_seconds,
@@ -1350,8 +1360,9 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
         track.report("estimate", trackfile.ProblemKind.FAILED, result.message)
     if options.refine_model:
         refinement = track.extra["model_refinement"] = _refinement(native, result)
-        track.report("model_refinement", trackfile.ProblemKind.HINT,
-                     _refinement_said(refinement))
+        if refinement["used"]:  # else the model is as the user made it: nothing to say
+            track.report("model_refinement", trackfile.ProblemKind.HINT,
+                         _refinement_said(refinement))
     track.extra["segments"] = [[seg[0], seg[-1]] for seg in result.segments]
     if result.evidence:
         track.extra["evidence"] = dict(result.evidence, frames=list(visit))

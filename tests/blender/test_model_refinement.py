@@ -30,7 +30,8 @@ def test_a_refined_run_reports_and_leaves_the_opened_file_alone(long_plaza, tmp_
         shutil.copy(os.path.join(out, name), str(tmp_path / name))
     before = digest(blend)
     track_path = str(tmp_path / "refined.sun.json")
-    proc = run_estimate(blend, track_path, "--refine-model", "--apply-model-corrections")
+    # Refined by default: the run's account is in the track either way.
+    proc = run_estimate(blend, track_path, "--apply-model-corrections")
     assert proc.returncode == 0, proc.stdout + proc.stderr
     track = json.load(open(track_path))
     refinement = track["model_refinement"]
@@ -39,19 +40,31 @@ def test_a_refined_run_reports_and_leaves_the_opened_file_alone(long_plaza, tmp_
     for o in refinement["objects"]:
         assert 0 <= o["object_id"] < len(track["method"]["options"]["model_objects"])
         assert len(o["transform"]) == 4 and len(o["scale"]) == 3
-    assert any(p["stage"] == "model_refinement" for p in track["problems"])
+    # A hint and the confidence held below 0.5 only where the corrections
+    # were used; a note says what --apply-model-corrections did either way.
+    used = refinement["used"]
+    assert used == any(p["stage"] == "model_refinement" for p in track["problems"])
+    assert not used or all(f["confidence"] < 0.5 for f in track["frames"])
     assert any(line.startswith("sunlapse: note:") and "model" in line and "clip" in line
                for line in proc.stdout.splitlines()), proc.stdout
     assert digest(blend) == before  # nothing saved without --save
+    # Asked not to, the run leaves the model alone and says nothing of it.
+    proc = run_estimate(blend, track_path, "--no-refine-model")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "model_refinement" not in json.load(open(track_path))
 
 
 def test_applying_corrections_needs_the_refinement(long_plaza, tmp_path):
     out, _ = long_plaza
+    for off in (["--no-refine-model"], ["--method", "thesis"]):
+        proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "t.sun.json"),
+                            "--apply-model-corrections", *off)
+        assert proc.returncode == 2
+        assert any("--apply-model-corrections needs the model refined" in line
+                   for line in error_lines(proc)), proc.stderr
     proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "t.sun.json"),
-                        "--apply-model-corrections")
-    assert proc.returncode == 2
-    assert any("--apply-model-corrections needs --refine-model" in line
-               for line in error_lines(proc)), proc.stderr
+                        "--refine-model", "--no-refine-model")
+    assert proc.returncode == 2, proc.stderr
     # The thesis baseline runs on the model as it is: asking to refine it
     # is a usage error, not a flag silently ignored.
     proc = run_estimate(os.path.join(out, "scene.blend"), str(tmp_path / "t.sun.json"),
@@ -140,12 +153,13 @@ def test_corrections_are_applied_exactly_once_and_not_to_driven_objects(empty_sc
 def test_a_track_without_used_corrections_applies_nothing(empty_scene):
     box, _, _, _ = _scene_with_a_box_and_a_camera(empty_scene)
     before = np.array(box.matrix_world)
-    for refinement in ({"used": False, "message": "not refined"}, None):
+    for refinement, why in (({"used": False, "message": "not refined"}, "left the model"),
+                            (None, "--refine-model")):
         extra = {} if refinement is None else {"model_refinement": refinement}
         try:
             model_fix.apply_corrections(bpy.context, _track_with(extra, ["Box"]))
         except ValueError as e:
-            assert "--refine-model" in str(e)
+            assert why in str(e)
         else:
             raise AssertionError("corrections applied from a track without them")
     assert np.allclose(np.array(box.matrix_world), before)
