@@ -147,12 +147,16 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
         track.extra["model_misfit"] = round(misfit, 4)
     refined = bool((track.extra.get("model_refinement") or {}).get("used"))
     model_off = calibration.model_doubted(misfit, refined)
-    if refined and not calibration.model_doubted(misfit):
+    if model_off and not calibration.model_doubted(misfit):
+        shares = "" if misfit is None else (
+            f": its shadows still miss the footage's by {misfit:.0%} of the pixels by their "
+            f"edges on a typical frame (a refined model that fits leaves under "
+            f"{calibration.REFINED_MISFIT_MAX:.0%})")
         track.report("model", trackfile.ProblemKind.HINT,
-                     "the clip refined a hand-made model (see model_refinement); what it "
-                     "could not see of the model (a caster's height, an object whose edges "
-                     "the footage does not show) still biases every frame's Sun alike. Check "
-                     "the casters' places and sizes against the footage")
+                     f"the clip refined a hand-made model (see model_refinement){shares}; what "
+                     f"it could not see of the model (a caster's height, an object whose edges "
+                     f"the footage does not show) still biases every frame's Sun alike. Check "
+                     f"the casters' places and sizes against the footage")
     elif model_off:
         # Shadows the model does not cast (notes.note_unmodelled_shadows,
         # reported before this) also leave the model's shadows missing the

@@ -289,13 +289,17 @@ def test_a_clip_whose_model_the_clip_refined_stays_below_one_half_and_says_why()
     """A model the clip had to refine was made by hand; what the refinement
     cannot see of it still biases every frame (held-out rough10: refined,
     misfit 0.054, 25 frames more than 5 deg off at 0.9 and more)."""
+    limit = calibration.REFINED_MISFIT_MAX
+    assert 0 < limit < calibration.MODEL_MISFIT_MAX
     assert calibration.model_doubted(None, refined=True)
-    assert calibration.model_doubted(0.0, refined=True)
-    assert calibration.clip_doubted(1.0, 0.0, refined=True)
+    assert calibration.model_doubted(limit, refined=True)
+    assert not calibration.model_doubted(limit - 0.001, refined=True)
+    assert not calibration.model_doubted(limit)
+    assert calibration.clip_doubted(1.0, limit, refined=True)
 
-    def finished(used):
+    def finished(used, misfit=limit + 0.01):
         raws = [RawSun(f, 40.0 + f, 180.0 + f, confidence=0.97,
-                       sunlight=trackfile.Sunlight.YES, tracked=_Tracked(0.01))
+                       sunlight=trackfile.Sunlight.YES, tracked=_Tracked(misfit))
                 for f in range(1, 11)]
         track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
                                         "smoothing": "two_pass"})
@@ -311,7 +315,12 @@ def test_a_clip_whose_model_the_clip_refined_stays_below_one_half_and_says_why()
     assert [f.confidence for f in refined.frames] == [pytest.approx(cap)] * 10
     hint = refined.problem("model")
     assert hint is not None and "refined" in hint.message and "caster" in hint.message
+    assert f"{limit + 0.01:.0%}" in hint.message
     assert "refined by the clip" in refined.problem("confidence").message
+    # Refined, and its shadows then fit the footage closely: the map's.
+    fits = finished(True, misfit=0.5 * limit)
+    assert fits.problem("model") is None and fits.problem("confidence") is None
+    assert all(f.confidence > 0.9 for f in fits.frames)
 
 
 def test_shadows_the_model_does_not_cast_stay_named_when_the_model_misfits():
