@@ -621,6 +621,9 @@ class _WholeClip:
             ((f, self.reduced(self.read_gray(f), f)) for f in wanted_reference)
             if self.stream is None else self.stream(wanted_reference, near, size))
         independent = getattr(reference_frames, "frames_independent", False)
+        refine = self.refine_model and self.view is None
+        if self.refine_model and not refine:
+            self.result.model_refinement_note = "not refined: the camera moves"
         self.cast_from_model()
         self.mark("table")
         reference: List[Optional[np.ndarray]] = []
@@ -636,10 +639,10 @@ class _WholeClip:
                 reference.append(gray)
                 if gray is not None and f in wanted and f not in kept and gray.nbytes <= budget:
                     kept[f], budget = gray, budget - gray.nbytes
-            if not self.refine_model:
+            if not refine:
                 used = self.sky.set_reference(reference)
             prepared.result()
-        if self.refine_model:
+        if refine:
             # Refined on the reference frames once decoded; the table was
             # cast from the user's model meanwhile, and is cast again (with
             # the tracker's map) only where the refined model is used.
@@ -672,12 +675,9 @@ class _WholeClip:
         """The hand-made model and the camera refined so that the model's
         edges fall on the edges that stay put over the reference frames
         (native refine_model); the estimate then runs on the refined model.
-        A moving camera's model is left as it is (its views are solved).
-        Returns whether the estimate is to use the refined model."""
+        A fixed camera's only (a moving camera's views are solved). Returns
+        whether the estimate is to use the refined model."""
         native = self.native
-        if self.view is not None:
-            self.result.model_refinement_note = "not refined: the camera moves"
-            return False
         edges = native.stable_edges(grays, options=native.StableEdgesOptions(
             ignore_top_rows=self.top))
         if edges is None:

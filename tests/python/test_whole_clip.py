@@ -702,7 +702,13 @@ def test_a_moving_camera_is_estimated_from_its_pose_on_every_frame(world):
     scene = world[0]
     numbers = list(range(1, n + 1))
     result = whole_clip.estimate(native, scene, cameras[12], numbers,
-                                 lambda f: frames[f - 1], [0], frame_cameras=cameras)
+                                 lambda f: frames[f - 1], [0], frame_cameras=cameras,
+                                 refine_model=True)
+    # Asked to refine the model (the default), a moving camera's is left as
+    # it is: its views are solved per frame.
+    assert result.model_refinement is None
+    assert result.model_refinement_note == "not refined: the camera moves"
+    assert "refine_s" not in result.timing
     errors = []
     for k, r in enumerate(result.frames):
         if k + 1 == 7:
