@@ -142,8 +142,10 @@ def confident_only(track):
 # clocked by the frames' times; the place comes from the .blend).
 FLAGS = {"default": ["--method", "default"],
          "thesis": ["--method", "thesis"],
-         # The hand-made model refined by the clip first (issue 25 item 5).
+         # The hand-made model refined by the clip first (issue 25 item 5;
+         # the default since 2026-11-29), and the model as it is.
          "refined": ["--method", "default", "--refine-model"],
+         "unrefined": ["--method", "default", "--no-refine-model"],
          "physical": ["--method", "default", "--smoothing", "physical", "--fit-latitude"],
          "physical_lat": ["--method", "default", "--smoothing", "physical", "--fixed-latitude"]}
 

@@ -6,7 +6,8 @@
                          [--no-times] [--seeds 1,2,5-9,rough1-6] [--jobs J]
                          [--estimator-only] [--smoothings two_pass,physical]
                          [--method default] [--cache DIR] [--out FIGURES.json]
-                         [--uncalibrated-confidence] [--refine-model]
+                         [--uncalibrated-confidence]
+                         [--refine-model | --no-refine-model]
 
 Scenes: the fixed members of examples/random_scene.py (the plaza of issue 14,
 twice) and random seeds 1, 2, ... up to --scenes in all (default 32; every
@@ -53,7 +54,8 @@ Each scene's scene.blend is then run exactly as a user would:
           --smoothing S
 (no --ground: the ground is found by the add-on; --times CSV for the
 multi-day members; --uncalibrated-confidence when asked, for
-bench/calibrate.py; --refine-model when asked). Frames are judged where the Sun is at least 4 deg up
+bench/calibrate.py; --refine-model or --no-refine-model when asked).
+Frames are judged where the Sun is at least 4 deg up
 (and, in an overcast run, where at least half the Sun's light comes through).
 Frames without direct sunlight in the footage (the Sun below the horizon, the
 overcast run) are judged on the track's per-frame sunlight flag instead; the
@@ -525,9 +527,13 @@ def main(argv=None):
     p.add_argument("--uncalibrated-confidence", action="store_true",
                    help="the runs write the estimator's support as confidence (for "
                         "bench/calibrate.py) instead of the calibrated probability")
-    p.add_argument("--refine-model", action="store_true",
-                   help="the runs refine the hand-made model by the clip first "
-                        "(run_estimate.py --refine-model)")
+    refine = p.add_mutually_exclusive_group()
+    refine.add_argument("--refine-model", action="store_true",
+                        help="the runs refine the hand-made model by the clip first "
+                             "(run_estimate.py --refine-model; the default there)")
+    refine.add_argument("--no-refine-model", action="store_true",
+                        help="the runs use the model as it is (run_estimate.py "
+                             "--no-refine-model)")
     args = p.parse_args(argv)
     if args.scenes < 1:
         p.error(f"--scenes must be at least 1, got {args.scenes}")
@@ -602,7 +608,8 @@ def main(argv=None):
             track, wall, err = estimate(k, folders[base], args.method, smoothing,
                                         os.path.join(work, "tracks"), log_dir, times,
                                         args.uncalibrated_confidence,
-                                        ["--refine-model"] if args.refine_model else [])
+                                        ["--refine-model"] if args.refine_model else
+                                        ["--no-refine-model"] if args.no_refine_model else [])
             return score(k, folders[base], track, wall, err)
         with cf.ThreadPoolExecutor(args.jobs) as pool:
             rows = list(pool.map(run, runs))
