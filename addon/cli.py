@@ -97,7 +97,8 @@ def build_parser():
                              "turned and scaled and the camera turned and zoomed so that the "
                              "model's edges fall on the footage's; used only where the model "
                              "is clearly off, and then every frame's confidence stays below "
-                             "0.5; the track lists the corrections (the .blend is not changed)")
+                             "0.5 unless the refined model's shadows fit the footage closely; "
+                             "the track lists the corrections (the .blend is not changed)")
     refine.add_argument("--no-refine-model", dest="refine_model", action="store_false",
                         default=None, help="use the model as it is, without the refinement")
     p.add_argument("--apply-model-corrections", action="store_true",

@@ -62,7 +62,8 @@ Flags:
                         puts it back. The estimate then uses the refined
                         model, keeps every frame's confidence below 0.5 (a
                         hand-made model's remaining error biases every frame)
-                        and says so; the track's extra.model_refinement lists
+                        unless the refined model's shadows then fit the
+                        footage closely, and says so; the track's extra.model_refinement lists
                         each correction (object_id indexes
                         method.options.model_objects). The .blend is not
                         changed
