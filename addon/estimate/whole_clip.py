@@ -203,14 +203,13 @@ PACE_SWITCH_FRAMES = 3
 OFF_CIRCLE_UNLIT_DEG = 10.0
 # Without times, a segment the path jumped to between two others whose
 # Suns lie on one circle at one pace (at least EXCURSION_SIDE_FRAMES in
-# sunlight on either side, EXCURSION_INLIER_SHARE of them on it) is footage
-# the clip went on through, not a cut: where most of its Suns are further
-# than OFF_CIRCLE_UNLIT_DEG off that circle, its evidence is not the Sun's
-# and the path is chosen again without it. Fresh member trees9: the box in
+# sunlight on either side, most of each side's within OFF_CIRCLE_UNLIT_DEG
+# of the circle fitted to both) is footage the clip went on through, not a
+# cut: where most of its own Suns are further off that circle, its evidence
+# is not the Sun's and the path is chosen again without it. Fresh member trees9: the box in
 # a tree's unmodelled shade, frames 17-23 a segment of their own 118-127
 # deg off at the model rule's 0.41, between segments within 7 deg.
 EXCURSION_SIDE_FRAMES = 3
-EXCURSION_INLIER_SHARE = 0.75
 # With capture times and the place, a frame whose Sun the ephemeris puts
 # below the horizon has no direct sunlight, whatever its evidence (a night
 # frame's street lights and ambient shading gave a raw Sun 5 deg up on the
@@ -970,11 +969,20 @@ class _WholeClip:
                 [frames[k].sun_in_world if k in around else None for k in span],
                 CIRCLE_INLIER_FLOOR_DEG,
                 [max(frames[k].confidence, 1e-3) for k in span], times_are_seconds=False)
-            if not fit.success or len(fit.inliers) < EXCURSION_INLIER_SHARE * len(around):
+            if not fit.success:
                 continue
-            off = [angles.angle_between_deg(frames[k].sun_in_world,
-                                            fit.sun_in_world[k - span.start]) for k in inside]
-            if 2 * sum(o > OFF_CIRCLE_UNLIT_DEG for o in off) > len(off):
+
+            def far(ks: List[int]) -> int:
+                return sum(angles.angle_between_deg(frames[k].sun_in_world,
+                                                    fit.sun_in_world[k - span.start])
+                           > OFF_CIRCLE_UNLIT_DEG for k in ks)
+            # Each side on it, not the fit's inliers alone: a long side makes
+            # most of those by itself (a clip played forward, back and forward
+            # again: a 90-frame leg and a 20-frame one, 80 deg off the first's
+            # circle, left the 89 frames between without a Sun).
+            if any(2 * far(side) >= len(side) for side in (before, after)):
+                continue
+            if 2 * far(inside) > len(inside):
                 out.extend(range(lo, hi))
         return out
 

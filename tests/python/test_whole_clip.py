@@ -871,3 +871,20 @@ def test_a_stretch_whose_shadows_are_not_the_suns_is_not_a_cut(world):
             assert error_deg(r.sun_in_world, truth[k]) < (10.0 if lo <= k < hi else 1.0), k
     # Without the circle (no fit given) nothing tells the stretch from a cut.
     assert run(world, frames).jumps == [lo + 1, hi + 1]
+
+
+def test_a_short_leg_after_a_long_one_does_not_make_the_leg_between_an_excursion(world):
+    """A clip played forward, back and forward again, no times, its last leg
+    short (the speed benchmark's ping-pong clip ends so): the long first leg
+    alone made most of the inliers of a circle through the legs either side
+    of the middle one, which was then taken for a stretch whose shadows are
+    not the Sun's, and its 89 frames had no Sun. Each side must be on it."""
+    n, short = 60, 16
+    forward = [sun(50 - 0.3 * k, 120 + 0.4 * k) for k in range(n)]
+    truth = forward + forward[::-1] + forward[:short]
+    result = run(world, [draw(world, d, k) for k, d in enumerate(truth)], None,
+                 sun_circle.fit_trimmed)
+    assert len(result.segments) == 3, result.segments
+    for k, r in enumerate(result.frames):
+        assert r.sun_in_world is not None, (k, r.reason)
+        assert error_deg(r.sun_in_world, truth[k]) < 1.0, k
