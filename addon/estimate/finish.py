@@ -146,8 +146,9 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     if misfit is not None:
         track.extra["model_misfit"] = round(misfit, 4)
     refined = bool((track.extra.get("model_refinement") or {}).get("used"))
+    misfits = calibration.model_doubted(misfit)  # whatever the refinement
     model_off = calibration.model_doubted(misfit, refined)
-    if model_off and not calibration.model_doubted(misfit):
+    if model_off and not misfits:
         shares = "" if misfit is None else (
             f": its shadows still miss the footage's by {misfit:.0%} of the pixels by their "
             f"edges on a typical frame (a refined model that fits leaves under "
@@ -157,7 +158,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"it could not see of the model (a caster's height, an object whose edges "
                      f"the footage does not show) still biases every frame's Sun alike. Check "
                      f"the casters' places and sizes against the footage")
-    elif model_off:
+    elif misfits:
         # Shadows the model does not cast (notes.note_unmodelled_shadows,
         # reported before this) also leave the model's shadows missing the
         # footage's: that hint is kept, as a cause.

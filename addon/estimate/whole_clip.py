@@ -206,9 +206,10 @@ OFF_CIRCLE_UNLIT_DEG = 10.0
 # sunlight on either side, most of each side's within OFF_CIRCLE_UNLIT_DEG
 # of the circle fitted to both) is footage the clip went on through, not a
 # cut: where most of its own Suns are further off that circle, its evidence
-# is not the Sun's and the path is chosen again without it. Fresh member trees9: the box in
-# a tree's unmodelled shade, frames 17-23 a segment of their own 118-127
-# deg off at the model rule's 0.41, between segments within 7 deg.
+# is not the Sun's and the path is chosen again without it. Fresh member
+# trees9: the box in a tree's unmodelled shade, frames 17-23 a segment of
+# their own 118-127 deg off at the model rule's 0.41, between segments
+# within 7 deg.
 EXCURSION_SIDE_FRAMES = 3
 # With capture times and the place, a frame whose Sun the ephemeris puts
 # below the horizon has no direct sunlight, whatever its evidence (a night
@@ -943,7 +944,7 @@ class _WholeClip:
 
     def excursions(self) -> List[int]:
         """Without times, the frame positions of each segment the path
-        jumped to and back from (EXCURSION_* above): the Suns of the
+        jumped to and back from (EXCURSION_SIDE_FRAMES above): the Suns of the
         segments either side lie on one circle at one pace, so the clip
         went on through it, and most of its own Suns are far off that
         circle. Its evidence is then not the Sun's."""
@@ -1405,10 +1406,8 @@ def _refinement(native, result: WholeClipResult) -> dict:
 
 
 def _refinement_said(refinement: dict) -> str:
-    """One sentence for the user on what the clip changed in the model."""
-    if not refinement["used"]:
-        return (f"the model was not refined by the clip ({refinement['message']}); the "
-                f"estimate used it as modelled")
+    """One sentence for the user on what the clip changed in the model the
+    estimate used (refinement["used"]; run() says nothing otherwise)."""
     moved = [o for o in refinement["objects"] if o["refined"]]
     move = max(float(np.hypot(*o["move_in_world_m"])) for o in moved)
     turn = max(abs(o["turn_deg"]) for o in moved)
