@@ -44,16 +44,6 @@ void PolynomialDistortion::Check() const {
           "distortion k1/k2/k3 must be finite");
 }
 
-Eigen::Vector2d PolynomialDistortion::Distort(
-    const Eigen::Vector2d& undistorted_px) const {
-  const double x = (undistorted_px.x() - principal_x_px) / focal_x_px;
-  const double y = (undistorted_px.y() - principal_y_px) / focal_y_px;
-  const double r2 = x * x + y * y;
-  const double f = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  return {principal_x_px + focal_x_px * x * f,
-          principal_y_px + focal_y_px * y * f};
-}
-
 Eigen::Vector2d PolynomialDistortion::Undistort(
     const Eigen::Vector2d& distorted_px) const {
   const double xd = (distorted_px.x() - principal_x_px) / focal_x_px;

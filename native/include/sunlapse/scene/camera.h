@@ -59,7 +59,22 @@ struct PolynomialDistortion {
   void Check() const;
   bool IsIdentity() const { return k1 == 0.0 && k2 == 0.0 && k3 == 0.0; }
   // Undistorted (ideal pinhole) pixel -> distorted (recorded) pixel.
-  Eigen::Vector2d Distort(const Eigen::Vector2d& undistorted_px) const;
+  Eigen::Vector2d Distort(const Eigen::Vector2d& undistorted_px) const {
+    return Distort(undistorted_px, 1.0);
+  }
+  // The same with both focal lengths scaled by focal_scale, for any scalar
+  // (the model refinement differentiates it with Ceres's Jets).
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> Distort(const Eigen::Matrix<T, 2, 1>& undistorted_px,
+                                 const T& focal_scale) const {
+    const T fx = focal_scale * focal_x_px, fy = focal_scale * focal_y_px;
+    const T x = (undistorted_px.x() - principal_x_px) / fx;
+    const T y = (undistorted_px.y() - principal_y_px) / fy;
+    const T r2 = x * x + y * y;
+    const T f = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    return Eigen::Matrix<T, 2, 1>(principal_x_px + fx * x * f,
+                                  principal_y_px + fy * y * f);
+  }
   // Recorded pixel -> ideal pixel, by Newton iterations on the radius.
   Eigen::Vector2d Undistort(const Eigen::Vector2d& distorted_px) const;
 };
