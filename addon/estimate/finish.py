@@ -175,7 +175,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"the casters' places and sizes against the footage"
                      + ("" if options.refine_model else
                         ", or let the clip refine them (Refine Model, --refine-model)"))
-    seldom_measured = calibrated and calibration.clip_doubted(share)
+    few_measured = calibration.clip_doubted(share)
+    seldom_measured = calibrated and few_measured
     model_doubted = calibrated and model_off
     doubted = seldom_measured or model_doubted
     if seldom_measured:
@@ -209,10 +210,25 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     if track.initial and track.initial.get("confidence") is not None:
         track.initial["confidence"] = reported(track.initial["confidence"],
                                                track.initial.get("frame"))
+    # A frame the clock puts at night has its Sun where the ephemeris puts
+    # it, below the horizon. So has every predicted frame of a clip whose
+    # Sun was seldom measured: its path through so few Suns bounds nothing
+    # (the AMOS webcams: 1 of 43 measured, predicted Suns 60-130 deg off).
+    by_ephemeris = [_predicted(r) and r.clock_sun is not None and
+                    (r.clock_night or few_measured) for r in raws]
+    daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
+    if daytime:
+        track.report("prediction", trackfile.ProblemKind.HINT,
+                     f"the Sun was measured on too few frames for its path to bound the others: "
+                     f"{len(daytime)} frame(s) without a measured Sun "
+                     f"({trackfile.frame_ranges(daytime)}) take the ephemeris's Sun at their "
+                     f"time and place, turned by the scene's north offset "
+                     f"({track.north_offset_deg:.1f} deg; the Sun Position add-on's North "
+                     f"Offset: set it if north is elsewhere)")
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
-        by_clock = _predicted(r) and r.clock_sun is not None
+        by_clock = by_ephemeris[k]
         if by_clock:
-            z_s, a_s = r.clock_sun   # night by the clock: where the Sun is, below the horizon
+            z_s, a_s = r.clock_sun
         predicted = _predicted(r) and z_s is not None and a_s is not None
         reason = r.reason
         if predicted:

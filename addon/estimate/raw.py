@@ -19,8 +19,9 @@ class RawSun:
     shadows_in_view: False where a moving camera looks away from where the
     model's shadows fall (the frame could not show the Sun).
     clock_sun: (zenith, geographic azimuth) the ephemeris gives for the
-    frame's capture time and place, where that puts it at night: its
-    predicted Sun, below the horizon.
+    frame's capture time and place, where both are known and the clock is
+    not contradicted by the footage; clock_night: the clock puts the frame
+    at night (its predicted Sun is clock_sun, below the horizon).
     circle_checked: whether a circle of the Sun's path checked the Sun (the
     whole-clip estimate's; None where the method has no such check)."""
     frame: int
@@ -31,6 +32,7 @@ class RawSun:
     tracked: Any = None
     sunlight: Optional[Sunlight] = None
     clock_sun: Optional[Tuple[float, float]] = None
+    clock_night: bool = False
     shadows_in_view: bool = True
     circle_checked: Optional[bool] = None
 

@@ -1348,7 +1348,9 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     track.method["initial"] = track.method["tracking"] = "whole_clip"
     by_frame = {r.frame: r for r in result.frames}
     night = set(result.clock_night)
-    raws = [_raw_sun(by_frame[f], north, ephemeris[f] if f in night else None) for f in frames]
+    # A clock the footage contradicts (a wrong zone) predicts nothing.
+    by_clock = ephemeris if result.clock_trusted is not False else {}
+    raws = [_raw_sun(by_frame[f], north, by_clock.get(f), f in night) for f in frames]
     circle = {k: _geographic(by_frame[f].circle_in_world, north) for k, f in enumerate(frames)
               if by_frame[f].circle_in_world is not None}
     if result.anchor is not None:
@@ -1427,10 +1429,11 @@ def _geographic(sun_in_world, north: float) -> Tuple[float, float]:
     return float(z), float(angles.azimuth_geographic_from_world(a_world, north))
 
 
-def _raw_sun(r: RawFrame, north: float, clock_sun=None) -> RawSun:
+def _raw_sun(r: RawFrame, north: float, clock_sun=None, clock_night: bool = False) -> RawSun:
     angles_of = (None, None) if r.sun_in_world is None else _geographic(r.sun_in_world, north)
     return RawSun(r.frame, *angles_of, confidence=r.on_circle, reason=r.reason,
                   tracked=r.tracked, sunlight=r.sunlight, clock_sun=clock_sun,
+                  clock_night=clock_night,
                   shadows_in_view=r.shadows_in_view, circle_checked=r.circle_checked)
 
 

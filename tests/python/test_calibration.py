@@ -389,3 +389,47 @@ def test_calibrate_caps_model_doubted_clips_at_their_share_within_2_deg(tmp_path
     assert calibrate.model_cap([(0.1, 0.9)] * 3) == calibration.DOUBTED_MAX_PROBABILITY
     assert calibrate.mapped(scenes["two_pass:rough"], ((0.1, 0.9),), True, True, 0.25) == \
         [(1.0, 0.25)] + [(4.0, 0.25)] * 3
+
+
+def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeris():
+    """With capture times and a place, a clip whose Sun was seldom measured
+    (the AMOS webcams: 1 of 43) predicts its frames without a measured Sun
+    where the ephemeris puts the Sun, not on a path through too few Suns,
+    and says so; a clip measured on most frames keeps its path (issue 25)."""
+    Sunlight = trackfile.Sunlight
+    unknown, night = (5, 6), 40
+
+    def run(measured):
+        raws = [RawSun(f, 40.0 + 0.1 * f, 180.0 + f, confidence=0.9, sunlight=Sunlight.YES,
+                       clock_sun=(45.0, 200.0))
+                for f in range(1, measured + 3) if f not in unknown]
+        raws += [RawSun(f, confidence=0.0, sunlight=Sunlight.UNKNOWN,
+                        clock_sun=(60.0 + f, 150.0 + f)) for f in unknown]
+        raws += [RawSun(night, confidence=0.0, sunlight=Sunlight.NO, clock_sun=(95.0, 250.0),
+                        clock_night=True)]
+        raws.sort(key=lambda r: r.frame)
+        track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                        "smoothing": "two_pass"}, north_offset_deg=-28.0)
+        finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
+                      [[r.frame for r in raws]])
+        return track, {f.frame: f for f in track.frames}
+
+    track, by_frame = run(5)    # 5 of 7 frames that could show the Sun measured it
+    for f in unknown:
+        est = by_frame[f]
+        assert est.predicted and est.confidence == 0.0
+        assert (est.zenith_deg, est.azimuth_deg) == (60.0 + f, 150.0 + f)
+        assert "ephemeris" in est.reason
+    assert (by_frame[night].zenith_deg, by_frame[night].azimuth_deg) == (95.0, 250.0)
+    assert not by_frame[1].predicted and abs(by_frame[1].zenith_deg - 40.1) < 1.0
+    hint = track.problem("prediction")
+    assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
+    assert "5-6" in hint.message and "-28.0" in hint.message
+
+    track, by_frame = run(30)   # 30 of 32 measured: the path predicts the day's frames
+    assert track.problem("prediction") is None
+    for f in unknown:
+        est = by_frame[f]
+        assert est.predicted and est.zenith_deg is not None
+        assert abs(est.zenith_deg - 40.0 - 0.1 * f) < 1.0 and "path" in est.reason
+    assert (by_frame[night].zenith_deg, by_frame[night].azimuth_deg) == (95.0, 250.0)

@@ -608,8 +608,8 @@ def test_the_clock_puts_night_frames_in_the_dark_unless_it_contradicts_the_foota
     assert result.frames[night].sun_in_world is None and result.frames[night].confidence == 0.0
     assert all(r.sunlight == Sunlight.YES for k, r in enumerate(result.frames) if k != night)
     # The finishing puts its Sun where the ephemeris does, below the horizon.
-    raw = whole_clip._raw_sun(result.frames[night], 0.0, (98.0, 250.0))
-    assert raw.clock_sun == (98.0, 250.0) and not raw.has_sun
+    raw = whole_clip._raw_sun(result.frames[night], 0.0, (98.0, 250.0), True)
+    assert raw.clock_sun == (98.0, 250.0) and raw.clock_night and not raw.has_sun
 
     wrong = estimate([-20.0] * n)   # every frame at night: the zone is wrong
     assert wrong.clock_trusted is False and wrong.clock_night == []
