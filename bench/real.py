@@ -29,6 +29,7 @@ bench/sky_costs.py.
 """
 import argparse
 import csv
+import dataclasses
 import datetime as dt
 import math
 import os
@@ -186,6 +187,37 @@ def raw_view(track):
     return out
 
 
+def clip_truth(times_csv, sun_position, spec):
+    """(truth, scored, kept): the ephemeris at each capture (geographic:
+    north offset 0, as scored_views turns the runs), its frames scored (the
+    Sun high enough), and the truth kept beside the runs in the scene's
+    north (for the sky's costs against it: bench/sky_costs.py TRUTH)."""
+    truth = truth_track(times_csv, sun_position, spec)
+    scored = truth if spec["min_elevation"] is None else sun_up(truth, spec["min_elevation"])
+    kept = dataclasses.replace(truth, north_offset_deg=spec.get("north_offset_deg") or 0.0)
+    return truth, scored, kept
+
+
+def scored_views(name, track, spec, scored):
+    """[(label, view)] of a run's track, scored against `scored` (the
+    ephemeris, geographic: north offset 0): its raw angles, smoothed, and
+    raw where confident; in the scene's given north where it has one
+    (in_given_north), or each turned by the rotation an unknown north
+    leaves (azimuth_offset)."""
+    views = [(name + " raw", raw_view(track)),
+             (name + " smoothed", geographic(track)),
+             (name + " raw, confident", confident_only(raw_view(track)))]
+    given = spec.get("north_offset_deg")
+    if given is not None:
+        views = [(label, in_given_north(view, track.north_offset_deg, given))
+                 for label, view in views]
+    if not spec["north_known"]:
+        views = [(f"{label} (azimuth +{off:.1f})", rotated(view, off))
+                 for label, view in views
+                 for off in [azimuth_offset(view, scored)]]
+    return views
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default=os.path.join(ROOT, "build", "real"))
@@ -215,11 +247,9 @@ def main(argv=None):
     for clip in clips:
         spec = CLIP_SPECS[clip]
         folder = folders[spec["footage"]]
-        truth = truth_track(os.path.join(folder, f"{clip}.times.csv"), native.sun_position, spec)
-        # Kept for the sky's costs against it (bench/sky_costs.py TRUTH).
-        truth.north_offset_deg = spec.get("north_offset_deg") or 0.0
-        trackfile.write_track(os.path.join(args.out, f"{clip}.truth.sun.json"), truth)
-        scored = truth if spec["min_elevation"] is None else sun_up(truth, spec["min_elevation"])
+        truth, scored, kept = clip_truth(os.path.join(folder, f"{clip}.times.csv"),
+                                         native.sun_position, spec)
+        trackfile.write_track(os.path.join(args.out, f"{clip}.truth.sun.json"), kept)
         blend = os.path.join(ROOT, "examples", "real", f"{clip}.blend")
         for method in args.methods:
             name = f"{spec['short']}/{method}"
@@ -232,19 +262,11 @@ def main(argv=None):
                                                    message=f"run failed (see {out_json}.log)"))
                 continue
             track = trackfile.read_track(out_json)
-            views = [(name + " raw", raw_view(track)),
-                     (name + " smoothed", geographic(track)),
-                     (name + " raw, confident", confident_only(raw_view(track)))]
+            views = scored_views(name, track, spec, scored)
             if given is not None:
-                views = [(label, in_given_north(view, track.north_offset_deg, given))
-                         for label, view in views]
                 fit = track.extra.get("sun_path_fit")
                 notes.append(f"{name}: north offset used {track.north_offset_deg:+.1f} deg "
                              f"({'fitted' if fit else 'given'}; scene {given:+.1f})")
-            if not spec["north_known"]:
-                views = [(f"{label} (azimuth +{off:.1f})", rotated(view, off))
-                         for label, view in views
-                         for off in [azimuth_offset(view, scored)]]
             if spec["min_elevation"] is not None and method != "thesis":
                 notes.append(f"{name}: {sunlight_summary(track, truth)}")
             for label, view in views:
