@@ -214,21 +214,32 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # it, below the horizon. So has every predicted frame of a clip whose
     # Sun was seldom measured: its path through so few Suns bounds nothing
     # (the AMOS webcams: 1 of 43 measured, predicted Suns 60-130 deg off).
+    # Where that clip's measured Suns agree on a north of their own (a north
+    # offset left at 0), the ephemeris is turned to it.
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or few_measured) for r in raws]
+    north_turn = _clock_north_turn(raws) if few_measured else None
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
     if daytime:
+        north_said = (
+            f"in the scene's north (north offset {track.north_offset_deg:.1f} deg: the Sun "
+            f"Position add-on's North Offset; set it if north is elsewhere)"
+            if north_turn is None or abs(north_turn) <= CLOCK_NORTH_TOLERANCE_DEG else
+            f"in the north the measured Suns agree on (north offset "
+            f"{track.north_offset_deg + north_turn:.1f} deg, against the scene's "
+            f"{track.north_offset_deg:.1f}: set the Sun Position add-on's North Offset to it "
+            f"if the measured Suns are right)")
         track.report("prediction", trackfile.ProblemKind.HINT,
                      f"the Sun was measured on too few frames for its path to bound the others: "
                      f"{len(daytime)} frame(s) without a measured Sun "
                      f"({trackfile.frame_ranges(daytime)}) take the ephemeris's Sun at their "
-                     f"time and place, turned by the scene's north offset "
-                     f"({track.north_offset_deg:.1f} deg; the Sun Position add-on's North "
-                     f"Offset: set it if north is elsewhere)")
+                     f"time and place, {north_said}")
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = by_ephemeris[k]
         if by_clock:
             z_s, a_s = r.clock_sun
+            if north_turn is not None:
+                a_s = angles.wrap_azimuth_deg(a_s + north_turn)
         predicted = _predicted(r) and z_s is not None and a_s is not None
         reason = r.reason
         if predicted:
@@ -338,6 +349,34 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None,
             zs[k], azs[k] = _past_span(zs[end], azs[end], raws[k].zenith_deg,
                                        raws[k].azimuth_deg, moved, circle_end, circle_here)
     return zs, azs
+
+
+# The measured Suns of a seldom-measured clip tell whether the scene's north
+# offset holds: if only north is off, one turn of the ephemeris's azimuths
+# takes them onto the measured ones. Trusted from CLOCK_NORTH_FRAMES measured
+# frames with the clock's Sun 10-80 deg up, CLOCK_NORTH_SHARE of them within
+# CLOCK_NORTH_TOLERANCE_DEG of the turn in azimuth and of the ephemeris in
+# zenith; else the ephemeris stays in the scene's north.
+CLOCK_NORTH_FRAMES = 3
+CLOCK_NORTH_SHARE = 0.75
+CLOCK_NORTH_TOLERANCE_DEG = 5.0
+
+
+def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
+    """The turn (deg, added to the ephemeris's geographic azimuths) on which
+    the measured Suns agree (see CLOCK_NORTH_FRAMES), or None."""
+    pairs = [(float(angles.wrap_signed_deg(r.azimuth_deg - r.clock_sun[1])),
+              abs(r.zenith_deg - r.clock_sun[0])) for r in raws
+             if r.zenith_deg is not None and r.azimuth_deg is not None
+             and r.clock_sun is not None and 10.0 <= r.clock_sun[0] <= 80.0]
+    if len(pairs) < CLOCK_NORTH_FRAMES:
+        return None
+    # The circular median: the measured turn nearest all others.
+    turn = min((d for d, _ in pairs), key=lambda t: sum(
+        abs(float(angles.wrap_signed_deg(d - t))) for d, _ in pairs))
+    agree = sum(abs(float(angles.wrap_signed_deg(d - turn))) <= CLOCK_NORTH_TOLERANCE_DEG and
+                dz <= CLOCK_NORTH_TOLERANCE_DEG for d, dz in pairs)
+    return turn if agree >= CLOCK_NORTH_SHARE * len(pairs) else None
 
 
 def _predicted(r: RawSun) -> bool:

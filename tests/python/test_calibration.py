@@ -399,9 +399,9 @@ def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeri
     Sunlight = trackfile.Sunlight
     unknown, night = (5, 6), 40
 
-    def run(measured):
+    def run(measured, clock_of_measured):
         raws = [RawSun(f, 40.0 + 0.1 * f, 180.0 + f, confidence=0.9, sunlight=Sunlight.YES,
-                       clock_sun=(45.0, 200.0))
+                       clock_sun=clock_of_measured(f))
                 for f in range(1, measured + 3) if f not in unknown]
         raws += [RawSun(f, confidence=0.0, sunlight=Sunlight.UNKNOWN,
                         clock_sun=(60.0 + f, 150.0 + f)) for f in unknown]
@@ -414,7 +414,9 @@ def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeri
                       [[r.frame for r in raws]])
         return track, {f.frame: f for f in track.frames}
 
-    track, by_frame = run(5)    # 5 of 7 frames that could show the Sun measured it
+    # 5 of 7 frames that could show the Sun measured it, nowhere near the
+    # ephemeris (a model the footage does not fit): the scene's north holds.
+    track, by_frame = run(5, lambda f: (20.0 + 9.0 * f, 300.0 - 37.0 * f))
     for f in unknown:
         est = by_frame[f]
         assert est.predicted and est.confidence == 0.0
@@ -426,7 +428,17 @@ def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeri
     assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
     assert "5-6" in hint.message and "-28.0" in hint.message
 
-    track, by_frame = run(30)   # 30 of 32 measured: the path predicts the day's frames
+    # The measured Suns are the ephemeris's turned by 30 deg: a north offset
+    # left 30 deg off. The predicted Suns are turned with them, and the
+    # hint names the north they agree on.
+    track, by_frame = run(5, lambda f: (40.0 + 0.1 * f, 150.0 + f))
+    for f in unknown:
+        assert by_frame[f].predicted and by_frame[f].zenith_deg == 60.0 + f
+        assert by_frame[f].azimuth_deg == pytest.approx(180.0 + f)
+    assert "2.0 deg" in track.problem("prediction").message   # -28 + 30
+
+    # 30 of 32 measured: the path predicts the day's frames.
+    track, by_frame = run(30, lambda f: (45.0, 200.0))
     assert track.problem("prediction") is None
     for f in unknown:
         est = by_frame[f]
