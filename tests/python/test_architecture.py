@@ -157,6 +157,8 @@ NOT_COPIES = {
     "estimate.whole_clip.EXCURSION_SIDE_FRAMES": "sunlit frames either side of a jumped-to "
                                                  "segment, not a stream's queue or a "
                                                  "sample's sides",
+    "estimate.finish.CLOCK_NORTH_FRAMES": "measured frames that agree on a north, not the "
+                                          "frames a stream queues",
 }
 
 
