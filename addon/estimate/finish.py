@@ -215,11 +215,15 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # Sun was seldom measured: its path through so few Suns bounds nothing
     # (the AMOS webcams: 1 of 43 measured, predicted Suns 60-130 deg off).
     # Where that clip's measured Suns agree on a north of their own (a north
-    # offset left at 0), the ephemeris is turned to it.
+    # offset left at 0), the ephemeris is turned to it; a measured Sun whose
+    # height the clock contradicts is predicted too (_off_the_clock).
+    north_turn = _clock_north_turn(raws) if few_measured else None
+    if few_measured:
+        raws = [_off_the_clock(r) for r in raws]
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or few_measured) for r in raws]
-    north_turn = _clock_north_turn(raws) if few_measured else None
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
+    contradicted = sum(r.has_sun for r, e in zip(raws, by_ephemeris) if e)
     if daytime:
         north_said = (
             f"in the scene's north (north offset {track.north_offset_deg:.1f} deg: the Sun "
@@ -231,9 +235,11 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
             f"if the measured Suns are right)")
         track.report("prediction", trackfile.ProblemKind.HINT,
                      f"the Sun was measured on too few frames for its path to bound the others: "
-                     f"{len(daytime)} frame(s) without a measured Sun "
-                     f"({trackfile.frame_ranges(daytime)}) take the ephemeris's Sun at their "
-                     f"time and place, {north_said}")
+                     f"{len(daytime)} frame(s) ({trackfile.frame_ranges(daytime)}) take the "
+                     f"ephemeris's Sun at their time and place"
+                     + (f" ({contradicted} of them had a measured Sun whose height it "
+                        f"contradicts)" if contradicted else "")
+                     + f", {north_said}")
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = by_ephemeris[k]
         if by_clock:
@@ -377,6 +383,27 @@ def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
     agree = sum(abs(float(angles.wrap_signed_deg(d - turn))) <= CLOCK_NORTH_TOLERANCE_DEG and
                 dz <= CLOCK_NORTH_TOLERANCE_DEG for d, dz in pairs)
     return turn if agree >= CLOCK_NORTH_SHARE * len(pairs) else None
+
+
+# In a seldom-measured clip, a measured Sun more than this far in height
+# from the ephemeris's is not the Sun's: the height does not depend on north,
+# and the clock is trusted (whole_clip's CLOCK_WRONG check). St. Louis's
+# measured Suns were 0.8-50 deg off in zenith (mean 21.7).
+CLOCK_HEIGHT_SLACK_DEG = 10.0
+
+
+def _off_the_clock(r: RawSun) -> RawSun:
+    """A measured Sun whose height the clock contradicts, as a frame whose
+    sunlight is unknown (predicted), its raw angles kept; else r."""
+    if r.zenith_deg is None or r.clock_sun is None or r.sunlight != Sunlight.YES:
+        return r
+    off = r.zenith_deg - r.clock_sun[0]
+    if abs(off) <= CLOCK_HEIGHT_SLACK_DEG:
+        return r
+    return replace(r, sunlight=Sunlight.UNKNOWN,
+                   reason=f"its shadows put the Sun {abs(off):.0f} deg "
+                          f"{'lower' if off > 0 else 'higher'} than the ephemeris does at its "
+                          f"time and place")
 
 
 def _predicted(r: RawSun) -> bool:
