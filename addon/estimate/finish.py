@@ -215,11 +215,11 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # Sun was seldom measured: its path through so few Suns bounds nothing
     # (the AMOS webcams: 1 of 43 measured, predicted Suns 60-130 deg off).
     # Where that clip's measured Suns agree on a north of their own (a north
-    # offset left at 0), the ephemeris is turned to it; a measured Sun whose
-    # height the clock contradicts is predicted too (_off_the_clock).
+    # offset left at 0), the ephemeris is turned to it; a measured Sun the
+    # clock contradicts is predicted too (_off_the_clock).
     north_turn = _clock_north_turn(raws) if few_measured else None
     if few_measured:
-        raws = [_off_the_clock(r) for r in raws]
+        raws = [_off_the_clock(r, north_turn) for r in raws]
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or few_measured) for r in raws]
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
@@ -237,8 +237,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"the Sun was measured on too few frames for its path to bound the others: "
                      f"{len(daytime)} frame(s) ({trackfile.frame_ranges(daytime)}) take the "
                      f"ephemeris's Sun at their time and place"
-                     + (f" ({contradicted} of them had a measured Sun whose height it "
-                        f"contradicts)" if contradicted else "")
+                     + (f" ({contradicted} of them had a measured Sun more than "
+                        f"{CLOCK_SLACK_DEG:.0f} deg from it)" if contradicted else "")
                      + f", {north_said}")
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = by_ephemeris[k]
@@ -385,25 +385,30 @@ def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
     return turn if agree >= CLOCK_NORTH_SHARE * len(pairs) else None
 
 
-# In a seldom-measured clip, a measured Sun more than this far in height
-# from the ephemeris's is not the Sun's: the height does not depend on north,
-# and the clock is trusted (whole_clip's CLOCK_WRONG check). St. Louis's
-# measured Suns were 0.8-50 deg off in zenith (mean 21.7).
-CLOCK_HEIGHT_SLACK_DEG = 10.0
+# In a seldom-measured clip, a measured Sun more than this far from the
+# ephemeris's is not the Sun's: the clock is trusted there (whole_clip's
+# CLOCK_WRONG check), and so is the north the ephemeris is turned to (the
+# measured Suns' own where they agree on one, else the scene's). On the
+# AMOS webcams the measured Suns were 0.8-50 deg off in zenith and 5-165 deg
+# in azimuth, the scenes' north measured.
+CLOCK_SLACK_DEG = 10.0
 
 
-def _off_the_clock(r: RawSun) -> RawSun:
-    """A measured Sun whose height the clock contradicts, as a frame whose
-    sunlight is unknown (predicted), its raw angles kept; else r."""
-    if r.zenith_deg is None or r.clock_sun is None or r.sunlight != Sunlight.YES:
+def _off_the_clock(r: RawSun, north_turn: Optional[float]) -> RawSun:
+    """A measured Sun the clock contradicts, as a frame whose sunlight is
+    unknown (predicted), its raw angles kept; else r."""
+    if r.zenith_deg is None or r.azimuth_deg is None or r.clock_sun is None or \
+            r.sunlight != Sunlight.YES:
         return r
-    off = r.zenith_deg - r.clock_sun[0]
-    if abs(off) <= CLOCK_HEIGHT_SLACK_DEG:
+    z, a = r.clock_sun
+    off = angles.angle_between_deg(
+        angles.sun_in_world_from_angles(r.zenith_deg, r.azimuth_deg),
+        angles.sun_in_world_from_angles(z, a + (north_turn or 0.0)))
+    if off <= CLOCK_SLACK_DEG:
         return r
     return replace(r, sunlight=Sunlight.UNKNOWN,
-                   reason=f"its shadows put the Sun {abs(off):.0f} deg "
-                          f"{'lower' if off > 0 else 'higher'} than the ephemeris does at its "
-                          f"time and place")
+                   reason=f"its shadows put the Sun {off:.0f} deg from where the ephemeris "
+                          f"does at its time and place")
 
 
 def _predicted(r: RawSun) -> bool:
