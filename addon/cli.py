@@ -462,7 +462,7 @@ def _run(argv, interrupt):
         predicted = sum(f.predicted for f in track.frames if f.frame in dark_set)
         print(f"sunlapse: no direct sunlight on {len(dark)} frame(s) "
               f"({trackfile.frame_ranges(dark)}): {predicted} of them have their Sun "
-              f"predicted from the path, at confidence 0")
+              f"predicted (from the path, or the ephemeris), at confidence 0")
     if args.apply_model_corrections:
         interrupt.check()
         try:

@@ -16,16 +16,18 @@ def finish_run(context, track, clip, extra):
     track.method["options"].update(extra)
     store.store_track(track)
     done = len(track.estimated())
-    raw = sum(1 for f in track.frames if f.raw_zenith_deg is not None)
+    raw = sum(1 for f in track.frames if _measured(f))
     dark = sum(1 for f in track.frames if _dark(f))
+    guessed = sum(1 for f in track.frames if f.predicted and f.has_estimate and not _dark(f))
     msg = (f"Sun estimated on {done}/{len(track.frames)} frames ({raw} measured"
            + (f", {dark} predicted without direct sunlight" if dark else "")
-           + (", the rest from smoothing)" if done > raw + dark else ")"))
+           + (f", {guessed} predicted without a Sun measured there" if guessed else "")
+           + (", the rest from smoothing)" if done > raw + dark + guessed else ")"))
     # What kept frames from a measurement, in the user's words (night is
     # no fault: said above).
     problems = [p.message for p in track.problems if p.is_warning]
     reasons = Counter(f.reason for f in track.frames
-                      if f.raw_zenith_deg is None and f.reason and not _dark(f))
+                      if not _measured(f) and f.reason and not _dark(f))
     if reasons and track.problem("estimate") is None:
         reason, count = reasons.most_common(1)[0]
         problems.append(f"{count} frame(s): {reason}")
@@ -37,6 +39,12 @@ def finish_run(context, track, clip, extra):
     return msg
 
 
+def _measured(f):
+    """A frame whose Sun is its own measurement, smoothed (a predicted one
+    keeps the raw angles the run set aside)."""
+    return f.raw_zenith_deg is not None and not f.predicted
+
+
 def _dark(f):
     """A frame without direct sunlight whose Sun is its path's: told, not
     a shortcoming of the run."""
@@ -45,7 +53,7 @@ def _dark(f):
 
 def report_level(track):
     """WARNING when frames lack a measurement or a stage had to give up."""
-    short = any(f.raw_zenith_deg is None and not _dark(f) for f in track.frames)
+    short = any(not _measured(f) and not _dark(f) for f in track.frames)
     troubled = any(p.is_warning for p in track.problems)
     return {"WARNING"} if short or troubled else {"INFO"}
 
