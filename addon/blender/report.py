@@ -40,8 +40,8 @@ def finish_run(context, track, clip, extra):
 
 
 def _measured(f):
-    """A frame whose Sun is its own measurement, smoothed (a predicted one
-    keeps the raw angles the run set aside)."""
+    """A frame whose Sun is its own measurement, smoothed (a track file
+    may carry raw angles on a predicted frame: not this add-on's)."""
     return f.raw_zenith_deg is not None and not f.predicted
 
 

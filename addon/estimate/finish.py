@@ -216,14 +216,16 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # (the AMOS webcams: 1 of 43 measured, predicted Suns 60-130 deg off).
     # Where that clip's measured Suns agree on a north of their own (a north
     # offset left at 0), the ephemeris is turned to it; a measured Sun the
-    # clock contradicts is predicted too (_off_the_clock).
+    # clock contradicts is set aside and predicted too (_off_the_clock).
     north_turn = _clock_north_turn(raws) if few_measured else None
+    contradicted = 0
     if few_measured:
-        raws = [_off_the_clock(r, north_turn) for r in raws]
+        kept = [_off_the_clock(r, north_turn) for r in raws]
+        contradicted = sum(k is not r for k, r in zip(kept, raws))
+        raws = kept
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or few_measured) for r in raws]
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
-    contradicted = sum(r.has_sun for r, e in zip(raws, by_ephemeris) if e)
     if daytime:
         north_said = (
             f"in the scene's north (north offset {track.north_offset_deg:.1f} deg: the Sun "
@@ -396,7 +398,9 @@ CLOCK_SLACK_DEG = 10.0
 
 def _off_the_clock(r: RawSun, north_turn: Optional[float]) -> RawSun:
     """A measured Sun the clock contradicts, as a frame whose sunlight is
-    unknown (predicted), its raw angles kept; else r."""
+    unknown and has no Sun of its own (predicted: the track's raw angles
+    and tracked shadow are null, the reason says how far off it was); else
+    r."""
     if r.zenith_deg is None or r.azimuth_deg is None or r.clock_sun is None or \
             r.sunlight != Sunlight.YES:
         return r
@@ -406,7 +410,8 @@ def _off_the_clock(r: RawSun, north_turn: Optional[float]) -> RawSun:
         angles.sun_in_world_from_angles(z, a + (north_turn or 0.0)))
     if off <= CLOCK_SLACK_DEG:
         return r
-    return replace(r, sunlight=Sunlight.UNKNOWN,
+    return replace(r, zenith_deg=None, azimuth_deg=None, tracked=None,
+                   sunlight=Sunlight.UNKNOWN,
                    reason=f"its shadows put the Sun {off:.0f} deg from where the ephemeris "
                           f"does at its time and place")
 

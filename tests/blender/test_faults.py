@@ -545,13 +545,16 @@ def test_the_summary_says_the_rest_came_from_smoothing_only_when_some_did(empty_
     assert "(3 measured)" in every and "smoothing" not in every
     some = report.finish_run(bpy.context, track({1, 3}), clip, {})
     assert "(2 measured, the rest from smoothing)" in some
-    # A measured Sun the run set aside (predicted, its raw angles kept) is
-    # not counted as measured.
-    set_aside = track({1, 2, 3})
-    set_aside.frames[1].predicted = True
-    said = report.finish_run(bpy.context, set_aside, clip, {})
+    # A predicted frame with a Sun (its path's, or the ephemeris's) is said
+    # to be predicted, not smoothed, and neither is it measured if its file
+    # carries raw angles.
+    predicted = track({1, 3})
+    predicted.frames[1].predicted = True
+    said = report.finish_run(bpy.context, predicted, clip, {})
     assert "(2 measured, 1 predicted without a Sun measured there)" in said
-    assert report.report_level(set_aside) == {"WARNING"}
+    predicted.frames[1].raw_zenith_deg = predicted.frames[1].raw_azimuth_deg = 40.0
+    said = report.finish_run(bpy.context, predicted, clip, {})
+    assert "(2 measured, 1 predicted without a Sun measured there)" in said
 
 
 # ---------------------------------------------------------------------------
