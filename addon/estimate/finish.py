@@ -108,22 +108,6 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     check_progress(progress, 0.97)
     numbers = [r.frame for r in raws]
     north = track.north_offset_deg
-    smoothed = None
-    if options.smoothing == "physical":
-        smoothed, north = _physical(native, track, numbers, raws, options, north)
-        if smoothed is not None:  # azimuths are geographic now, with the fitted north
-            turn = track.north_offset_deg - north
-            raws = [r if r.azimuth_deg is None else
-                    replace(r, azimuth_deg=angles.wrap_azimuth_deg(r.azimuth_deg + turn))
-                    for r in raws]
-            if track.initial:
-                track.initial["azimuth_deg"] = angles.wrap_azimuth_deg(
-                    track.initial["azimuth_deg"] + turn)
-            track.north_offset_deg = north
-    if smoothed is None:
-        mode = "two_pass" if options.smoothing == "physical" else options.smoothing
-        smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle,
-                                    paced)
     # The whole clip's support is reported as a probability (calibration.py)
     # where the map was measured to hold: two-pass and physical smoothing
     # (ECE 0.074 and 0.081 on the suite). Online smoothing's causal angles
@@ -145,6 +129,33 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     ) if options.method == "default" else None  # the thesis's tracker measures none
     if misfit is not None:
         track.extra["model_misfit"] = round(misfit, 4)
+    # In a clip whose Sun was seldom measured, a measured Sun the clock
+    # contradicts is set aside before any smoothing (_off_the_clock), and the
+    # measured Suns may say where north is (_clock_north_turn).
+    few_measured = calibration.clip_doubted(share)
+    north_turn = _clock_north_turn(raws) if few_measured else None
+    contradicted = 0
+    if few_measured:
+        kept = [_off_the_clock(r, north_turn) for r in raws]
+        contradicted = sum(k is not r for k, r in zip(kept, raws))
+        raws = kept
+    smoothed = None
+    if options.smoothing == "physical":
+        smoothed, north = _physical(native, track, numbers, raws, options, north)
+        if smoothed is not None:  # azimuths are geographic now, with the fitted north
+            turn = track.north_offset_deg - north
+            raws = [r if r.azimuth_deg is None else
+                    replace(r, azimuth_deg=angles.wrap_azimuth_deg(r.azimuth_deg + turn))
+                    for r in raws]
+            if track.initial:
+                track.initial["azimuth_deg"] = angles.wrap_azimuth_deg(
+                    track.initial["azimuth_deg"] + turn)
+            track.north_offset_deg = north
+            north_turn = None  # the fitted north is the ephemeris's
+    if smoothed is None:
+        mode = "two_pass" if options.smoothing == "physical" else options.smoothing
+        smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle,
+                                    paced)
     refined = bool((track.extra.get("model_refinement") or {}).get("used"))
     misfits = calibration.model_doubted(misfit)  # whatever the refinement
     model_off = calibration.model_doubted(misfit, refined)
@@ -175,7 +186,6 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                      f"the casters' places and sizes against the footage"
                      + ("" if options.refine_model else
                         ", or let the clip refine them (Refine Model, --refine-model)"))
-    few_measured = calibration.clip_doubted(share)
     seldom_measured = calibrated and few_measured
     model_doubted = calibrated and model_off
     doubted = seldom_measured or model_doubted
@@ -215,14 +225,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # Sun was seldom measured: its path through so few Suns bounds nothing
     # (the AMOS webcams: 1 of 43 measured, predicted Suns 60-130 deg off).
     # Where that clip's measured Suns agree on a north of their own (a north
-    # offset left at 0), the ephemeris is turned to it; a measured Sun the
-    # clock contradicts is set aside and predicted too (_off_the_clock).
-    north_turn = _clock_north_turn(raws) if few_measured else None
-    contradicted = 0
-    if few_measured:
-        kept = [_off_the_clock(r, north_turn) for r in raws]
-        contradicted = sum(k is not r for k, r in zip(kept, raws))
-        raws = kept
+    # offset left at 0), the ephemeris is turned to it; so are the measured
+    # Suns the clock contradicts, set aside above.
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or few_measured) for r in raws]
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]

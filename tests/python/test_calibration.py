@@ -453,3 +453,26 @@ def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeri
         assert est.predicted and est.zenith_deg is not None
         assert abs(est.zenith_deg - 40.0 - 0.1 * f) < 1.0 and "path" in est.reason
     assert (by_frame[night].zenith_deg, by_frame[night].azimuth_deg) == (95.0, 250.0)
+
+
+def test_suns_the_clock_sets_aside_do_not_steer_the_smoothing_of_the_others():
+    """A seldom-measured clip's measured Suns the clock contradicts are set
+    aside before the smoothing: the Suns kept are smoothed among
+    themselves, not pulled toward the ones set aside."""
+    Sunlight = trackfile.Sunlight
+    off = {1, 2, 4}
+    raws = [RawSun(f, *((70.0, 260.0) if f in off else (40.0, 180.0)), confidence=0.9,
+                   sunlight=Sunlight.YES, clock_sun=(40.0, 180.0)) for f in range(1, 8)]
+    raws += [RawSun(f, confidence=0.0, sunlight=Sunlight.UNKNOWN, clock_sun=(40.0, 180.0))
+             for f in (8, 9, 10)]
+    track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                    "smoothing": "two_pass"})
+    finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
+                  [[r.frame for r in raws]])
+    by_frame = {f.frame: f for f in track.frames}
+    assert track.extra["sun_measured_share"] == pytest.approx(0.7)
+    for f in (3, 5, 6, 7):
+        assert not by_frame[f].predicted
+        assert by_frame[f].zenith_deg == pytest.approx(40.0, abs=0.01)
+    for f in off:
+        assert by_frame[f].predicted and by_frame[f].zenith_deg == 40.0
