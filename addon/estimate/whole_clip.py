@@ -1348,8 +1348,7 @@ def run(scene, camera, clip_path: str, source, frames: Sequence[int], visit: Seq
     track.method["initial"] = track.method["tracking"] = "whole_clip"
     by_frame = {r.frame: r for r in result.frames}
     night = set(result.clock_night)
-    # A clock the footage contradicts (a wrong zone) predicts nothing.
-    by_clock = ephemeris if result.clock_trusted is not False else {}
+    by_clock = _clock_suns(ephemeris, result.clock_trusted)
     raws = [_raw_sun(by_frame[f], north, by_clock.get(f), f in night) for f in frames]
     circle = {k: _geographic(by_frame[f].circle_in_world, north) for k, f in enumerate(frames)
               if by_frame[f].circle_in_world is not None}
@@ -1427,6 +1426,14 @@ def _geographic(sun_in_world, north: float) -> Tuple[float, float]:
     """(zenith, geographic azimuth) of a direction toward the Sun."""
     z, a_world = angles.angles_from_sun_in_world(sun_in_world)
     return float(z), float(angles.azimuth_geographic_from_world(a_world, north))
+
+
+def _clock_suns(ephemeris: Dict[int, Tuple[float, float]],
+                clock_trusted: Optional[bool]) -> Dict[int, Tuple[float, float]]:
+    """The ephemeris's Suns the finishing may predict frames with: none
+    where the footage contradicts the clock (a wrong zone: whole_clip's
+    CLOCK_WRONG), which would put them hours off."""
+    return {} if clock_trusted is False else dict(ephemeris)
 
 
 def _raw_sun(r: RawFrame, north: float, clock_sun=None, clock_night: bool = False) -> RawSun:

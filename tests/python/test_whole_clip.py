@@ -615,6 +615,10 @@ def test_the_clock_puts_night_frames_in_the_dark_unless_it_contradicts_the_foota
     assert wrong.clock_trusted is False and wrong.clock_night == []
     assert len(wrong.clock_contradicted) >= 3
     assert sum(r.sunlight == Sunlight.YES for r in wrong.frames) >= n - 1
+    # Nor does a clock the footage contradicts predict any frame's Sun.
+    suns = {f: (60.0, 100.0 + f) for f in numbers}
+    assert whole_clip._clock_suns(suns, wrong.clock_trusted) == {}
+    assert whole_clip._clock_suns(suns, result.clock_trusted) == suns
 
 
 @pytest.mark.parametrize("independent", [True, False])
