@@ -137,7 +137,12 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     contradicted = 0
     if few_measured:
         kept = [_off_the_clock(r, north_turn) for r in raws]
-        contradicted = sum(k is not r for k, r in zip(kept, raws))
+        set_aside = {k.frame: k.reason for k, r in zip(kept, raws) if k is not r}
+        contradicted = len(set_aside)
+        if track.initial and track.initial.get("frame") in set_aside:
+            # The initial Sun is that frame's measured Sun: set aside alike.
+            track.initial["confidence"] = 0.0
+            track.initial["message"] = f"set aside: {set_aside[track.initial['frame']]}"
         raws = kept
     smoothed = None
     if options.smoothing == "physical":

@@ -409,7 +409,9 @@ def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeri
                         clock_night=True)]
         raws.sort(key=lambda r: r.frame)
         track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
-                                        "smoothing": "two_pass"}, north_offset_deg=-28.0)
+                                        "smoothing": "two_pass"}, north_offset_deg=-28.0,
+                                initial={"frame": 4, "zenith_deg": 40.4, "azimuth_deg": 184.0,
+                                         "confidence": 0.9, "message": "the best-supported"})
         finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
                       [[r.frame for r in raws]])
         return track, {f.frame: f for f in track.frames}
@@ -431,6 +433,8 @@ def test_a_seldom_measured_clip_with_a_clock_predicts_its_frames_by_the_ephemeri
     assert (by_frame[4].zenith_deg, by_frame[4].azimuth_deg) == (56.0, 152.0)
     assert by_frame[4].raw_zenith_deg is None and by_frame[4].confidence == 0.0
     assert "deg from where the ephemeris" in by_frame[4].reason
+    # Frame 4's Sun was the run's initial Sun: set aside with it.
+    assert track.initial["confidence"] == 0.0 and "set aside" in track.initial["message"]
     hint = track.problem("prediction")
     assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
     assert "6 frame(s) (1-2, 4-7)" in hint.message and "4 of them" in hint.message
