@@ -377,6 +377,7 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None,
 CLOCK_NORTH_FRAMES = 3
 CLOCK_NORTH_SHARE = 0.75
 CLOCK_NORTH_TOLERANCE_DEG = 5.0
+CLOCK_NORTH_CANDIDATES = 200
 
 
 def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
@@ -388,12 +389,18 @@ def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
              and r.clock_sun is not None and 10.0 <= r.clock_sun[0] <= 80.0]
     if len(pairs) < CLOCK_NORTH_FRAMES:
         return None
-    # The circular median: the measured turn nearest all others.
-    turn = min((d for d, _ in pairs), key=lambda t: sum(
-        abs(float(angles.wrap_signed_deg(d - t))) for d, _ in pairs))
-    agree = sum(abs(float(angles.wrap_signed_deg(d - turn))) <= CLOCK_NORTH_TOLERANCE_DEG and
-                dz <= CLOCK_NORTH_TOLERANCE_DEG for d, dz in pairs)
-    return turn if agree >= CLOCK_NORTH_SHARE * len(pairs) else None
+    turns = np.array([d for d, _ in pairs])
+    heights = np.array([dz for _, dz in pairs])
+    # The circular median: the measured turn nearest all others, among at
+    # most CLOCK_NORTH_CANDIDATES of them spread over their order (a long
+    # clip's thousands would cost their square).
+    ranked = np.sort(turns)
+    candidates = ranked[::max(1, len(ranked) // CLOCK_NORTH_CANDIDATES)]
+    cost = np.abs(angles.wrap_signed_deg(turns[None, :] - candidates[:, None])).sum(axis=1)
+    turn = float(candidates[int(np.argmin(cost))])
+    agree = (np.abs(angles.wrap_signed_deg(turns - turn)) <= CLOCK_NORTH_TOLERANCE_DEG) & \
+        (heights <= CLOCK_NORTH_TOLERANCE_DEG)
+    return turn if int(agree.sum()) >= CLOCK_NORTH_SHARE * len(pairs) else None
 
 
 # In a seldom-measured clip, a measured Sun more than this far from the

@@ -480,3 +480,18 @@ def test_suns_the_clock_sets_aside_do_not_steer_the_smoothing_of_the_others():
         assert by_frame[f].zenith_deg == pytest.approx(40.0, abs=0.01)
     for f in off:
         assert by_frame[f].predicted and by_frame[f].zenith_deg == 40.0
+
+
+def test_the_measured_suns_north_is_their_circular_median_on_a_long_clip_too():
+    """The turn the measured Suns agree on, from thousands of them (a long
+    clip's candidates are spread over their order): near their circular
+    median, across the wrap at 180 deg; none where they disagree."""
+    rng = random.Random(5)
+    Sunlight = trackfile.Sunlight
+
+    def suns(turn_of):
+        return [RawSun(f, 45.0, (200.0 + turn_of(f)) % 360.0, confidence=0.9,
+                       sunlight=Sunlight.YES, clock_sun=(45.0, 200.0)) for f in range(5000)]
+    turn = finish._clock_north_turn(suns(lambda f: 178.0 + rng.uniform(-3.0, 3.0)))
+    assert turn is not None and abs(((turn - 178.0) + 180.0) % 360.0 - 180.0) < 0.5
+    assert finish._clock_north_turn(suns(lambda f: rng.uniform(-180.0, 180.0))) is None
