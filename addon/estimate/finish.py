@@ -433,8 +433,9 @@ def _off_the_clock(r: RawSun, north_turn: Optional[float]) -> RawSun:
 
 
 def _predicted(r: RawSun) -> bool:
-    """Whether a frame's Sun is to be predicted from its segment's path:
-    the method decided it has no direct sunlight, or cannot tell."""
+    """Whether a frame's Sun is to be predicted (from its segment's path, or
+    the ephemeris): the method decided it has no direct sunlight, or cannot
+    tell."""
     return r.sunlight is not None and r.sunlight != Sunlight.YES
 
 
