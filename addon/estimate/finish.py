@@ -236,10 +236,12 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                     (r.clock_night or few_measured) for r in raws]
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
     if daytime:
+        # The note names the north the predictions are in: a turn the
+        # measured Suns agree on is applied below however small it is.
         north_said = (
             f"in the scene's north (north offset {track.north_offset_deg:.1f} deg: the Sun "
             f"Position add-on's North Offset; set it if north is elsewhere)"
-            if north_turn is None or abs(north_turn) <= CLOCK_NORTH_TOLERANCE_DEG else
+            if north_turn is None else
             f"in the north the measured Suns agree on (north offset "
             f"{track.north_offset_deg + north_turn:.1f} deg, against the scene's "
             f"{track.north_offset_deg:.1f}: set the Sun Position add-on's North Offset to it "
