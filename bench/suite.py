@@ -53,7 +53,8 @@ Each scene's scene.blend is then run exactly as a user would:
   blender -b scene.blend --python examples/run_estimate.py -- --out T --method M
           --smoothing S
 (no --ground: the ground is found by the add-on; --times CSV for the
-multi-day members; --uncalibrated-confidence when asked, for
+multi-day members, and for every member with --clock, which adds
+--latitude and --longitude; --uncalibrated-confidence when asked, for
 bench/calibrate.py; --refine-model or --no-refine-model when asked).
 Frames are judged where the Sun is at least 4 deg up
 (and, in an overcast run, where at least half the Sun's light comes through).
@@ -210,9 +211,10 @@ def times_csv(folder, path):
 
 
 def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, uncalibrated=False,
-             extra=()):
+             extra=(), place=False):
     """Runs the estimate on the scene's scene.blend (a "<key>/true" twin: on
-    its scene_true.blend); `times` passes the truth's capture times;
+    its scene_true.blend); `times` passes the truth's capture times, and
+    `place` its latitude and longitude too (rounded, as a user types them);
     `uncalibrated` asks for the estimator's support as confidence; `extra`:
     more flags of run_estimate.py."""
     twin = key.endswith(TRUE_SUFFIX)
@@ -225,8 +227,12 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, unca
     if uncalibrated:
         args.append("--uncalibrated-confidence")
     args += list(extra)
-    if times:
+    if times or place:
         args += ["--times", times_csv(folder, os.path.join(out_dir, f"{name}.times.csv"))]
+    if place and smoothing != "physical":
+        where = trackfile.read_track(os.path.join(folder, "truth.sun.json")).extra["place"]
+        args += ["--latitude", str(round(where["latitude_deg"], 2)),
+                 "--longitude", str(round(where["longitude_deg"], 2))]
     if smoothing == "physical":
         truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
         d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
@@ -508,6 +514,9 @@ def main(argv=None):
                         "0.3-2 m and a pan of 5-30 deg, keyed per frame with a solve's jitter")
     p.add_argument("--no-times", action="store_true",
                    help="do not give the multi-day members their capture times")
+    p.add_argument("--clock", action="store_true",
+                   help="give every member its capture times and its place (latitude and "
+                        "longitude), as a user who knows them would")
     p.add_argument("--seeds", type=parse_seeds,
                    help="exactly these scenes instead: e.g. 1,4,10-12,plaza14,twilight1-3,"
                         "rough1-6")
@@ -609,7 +618,8 @@ def main(argv=None):
                                         os.path.join(work, "tracks"), log_dir, times,
                                         args.uncalibrated_confidence,
                                         ["--refine-model"] if args.refine_model else
-                                        ["--no-refine-model"] if args.no_refine_model else [])
+                                        ["--no-refine-model"] if args.no_refine_model else [],
+                                        place=args.clock)
             return score(k, folders[base], track, wall, err)
         with cf.ThreadPoolExecutor(args.jobs) as pool:
             rows = list(pool.map(run, runs))
