@@ -159,6 +159,8 @@ NOT_COPIES = {
                                                  "sample's sides",
     "estimate.finish.CLOCK_NORTH_FRAMES": "measured frames that agree on a north, not the "
                                           "frames a stream queues",
+    "estimate.finish.CLOCK_NORTH_SHARE": "a share of the measured Suns the ephemeris keeps, "
+                                         "not of the Suns a circle holds",
 }
 
 

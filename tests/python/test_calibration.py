@@ -495,3 +495,70 @@ def test_the_measured_suns_north_is_their_circular_median_on_a_long_clip_too():
     turn = finish._clock_north_turn(suns(lambda f: 178.0 + rng.uniform(-3.0, 3.0)))
     assert turn is not None and abs(((turn - 178.0) + 180.0) % 360.0 - 180.0) < 0.5
     assert finish._clock_north_turn(suns(lambda f: rng.uniform(-180.0, 180.0))) is None
+
+
+def test_a_clip_whose_model_misses_the_footage_takes_the_ephemeris_where_the_clock_says_so():
+    """With capture times and a place, a clip measured on every frame whose
+    model's shadows miss the footage's (rough10 given its times: a path
+    through Suns 7 deg off on average, 13 at most) sets aside the measured
+    Suns far from the ephemeris and predicts them by it, in the north the
+    measured Suns agree on; the same clip with a model that fits keeps its
+    measured Suns."""
+    Sunlight = trackfile.Sunlight
+    clock = {f: (50.0 - f, 100.0 + 3.0 * f) for f in range(1, 11)}
+    far = {3, 8}
+
+    def run(misfit):
+        # The measured Suns are the ephemeris's with the north 90 deg off
+        # (the scene's north offset left at 0), two of them 25 deg off.
+        raws = [RawSun(f, clock[f][0] + (25.0 if f in far else 0.5),
+                       clock[f][1] + 90.0, confidence=0.9, sunlight=Sunlight.YES,
+                       tracked=_Tracked(misfit), clock_sun=clock[f]) for f in clock]
+        track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                        "smoothing": "two_pass"})
+        finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
+                      [[r.frame for r in raws]])
+        return track, {f.frame: f for f in track.frames}
+
+    track, by_frame = run(calibration.MODEL_MISFIT_MAX + 0.05)
+    for f in far:
+        est = by_frame[f]
+        assert est.predicted and est.confidence == 0.0 and est.raw_zenith_deg is None
+        assert est.zenith_deg == clock[f][0]
+        assert est.azimuth_deg == pytest.approx(clock[f][1] + 90.0)
+    for f in set(clock) - far:
+        assert not by_frame[f].predicted and by_frame[f].raw_zenith_deg is not None
+    hint = track.problem("prediction")
+    assert hint is not None and hint.message.startswith("the model's shadows miss the footage's")
+    assert "2 frame(s) (3, 8)" in hint.message and "north offset 90.0 deg" in hint.message
+
+    track, by_frame = run(0.01)
+    assert track.problem("prediction") is None
+    assert not any(by_frame[f].predicted for f in clock)
+
+
+def test_the_north_the_measured_suns_agree_on_needs_half_of_them_and_more_than_the_scenes():
+    """The measured Suns' turn is north when it keeps at least half of them
+    within the slack, and more of them than the scene's north does: a
+    rough model's Suns (rough10: 71% kept) turn it; Suns that agree on
+    nothing (the AMOS webcams) or that the scene's north keeps as well do
+    not."""
+    rng = random.Random(3)
+    Sunlight = trackfile.Sunlight
+
+    def suns(measured):
+        return [RawSun(f, z, a % 360.0, confidence=0.9, sunlight=Sunlight.YES,
+                       clock_sun=(45.0, 200.0)) for f, (z, a) in enumerate(measured)]
+    # 7 of 10 within 3 deg of the ephemeris turned by 85 deg, 3 far off.
+    rough = [(45.0 + rng.uniform(-3, 3), 285.0 + rng.uniform(-3, 3)) for _ in range(7)]
+    rough += [(45.0 + 20.0, 285.0 + 40.0 * k) for k in (1, 2, 3)]
+    turn = finish._clock_north_turn(suns(rough))
+    assert turn is not None and abs(turn - 85.0) < 3.5
+    # 4 of 10 agree: no north.
+    few = rough[:4] + [(45.0 + 20.0, 285.0 + 25.0 * k) for k in range(1, 7)]
+    assert finish._clock_north_turn(suns(few)) is None
+    scattered = [(rng.uniform(5, 85), rng.uniform(0, 360)) for _ in range(12)]
+    assert finish._clock_north_turn(suns(scattered)) is None
+    # Suns on the ephemeris, one 8 deg away in azimuth: the median turn
+    # (0 here) keeps no more than the scene's north does.
+    assert finish._clock_north_turn(suns([(45.0, 200.0)] * 4 + [(45.0, 208.0)])) is None
