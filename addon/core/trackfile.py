@@ -98,7 +98,8 @@ class ProblemKind(str, Enum):
 @dataclass(frozen=True)
 class Problem:
     """Something a stage of the run reports to the user, in their words.
-    stage: "estimate", "tracking", "smoothing", "model" or "times"."""
+    stage: "estimate", "tracking", "smoothing", "model", "times", "confidence",
+    "prediction", "north" (docs/track-format.md)."""
     stage: str
     kind: ProblemKind
     message: str

@@ -132,13 +132,13 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     refined = bool((track.extra.get("model_refinement") or {}).get("used"))
     misfits = calibration.model_doubted(misfit)  # whatever the refinement
     model_off = calibration.model_doubted(misfit, refined)
-    # In a clip the estimate does not explain (its Sun seldom measured, or
-    # its model's shadows missing the footage's), a measured Sun the clock
-    # contradicts is set aside before any smoothing (_off_the_clock), and the
-    # measured Suns may say where north is (_clock_north_turn).
+    # The measured Suns may say where north is (_clock_north_turn); in a
+    # clip the estimate does not explain (its Sun seldom measured, or its
+    # model's shadows missing the footage's), a measured Sun the clock
+    # contradicts is set aside before any smoothing (_off_the_clock).
     few_measured = calibration.clip_doubted(share)
     unexplained = few_measured or model_off
-    north_turn = _clock_north_turn(raws) if unexplained else None
+    north_turn = _clock_north_turn(raws)
     contradicted = 0
     if unexplained:
         kept = [_off_the_clock(r, north_turn) for r in raws]
@@ -237,6 +237,15 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # contradicts, set aside above.
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or unexplained) for r in raws]
+    if north_turn is not None:
+        track.report("north", trackfile.ProblemKind.HINT,
+                     f"the measured Suns agree with the ephemeris at their times and place in "
+                     f"a north {north_turn:+.1f} deg from the scene's (north offset "
+                     f"{track.north_offset_deg + north_turn:.1f} deg against "
+                     f"{track.north_offset_deg:.1f}): the frames the ephemeris predicts take "
+                     f"its Sun in that north. If the measured Suns are right, set the Sun "
+                     f"Position add-on's North Offset to it: the track's azimuths are "
+                     f"measured from the scene's north")
     daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
     if daytime:
         # The note names the north the predictions are in: a turn the
@@ -247,8 +256,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
             if north_turn is None else
             f"in the north the measured Suns agree on (north offset "
             f"{track.north_offset_deg + north_turn:.1f} deg, against the scene's "
-            f"{track.north_offset_deg:.1f}: set the Sun Position add-on's North Offset to it "
-            f"if the measured Suns are right)")
+            f"{track.north_offset_deg:.1f}; see the north hint)")
         track.report("prediction", trackfile.ProblemKind.HINT,
                      ("the Sun was measured on too few frames for its path to bound the others: "
                       if few_measured else

@@ -562,3 +562,38 @@ def test_the_north_the_measured_suns_agree_on_needs_half_of_them_and_more_than_t
     # Suns on the ephemeris, one 8 deg away in azimuth: the median turn
     # (0 here) keeps no more than the scene's north does.
     assert finish._clock_north_turn(suns([(45.0, 200.0)] * 4 + [(45.0, 208.0)])) is None
+
+
+def test_night_frames_take_the_ephemeris_in_the_north_the_measured_suns_agree_on():
+    """A clip the estimate explains, given its times and a place, whose
+    scene keeps its north offset at 0 while north is 40 deg away: its
+    measured Suns are kept as they are, its frames the clock puts at night
+    take the ephemeris's Sun turned to the measured Suns' north (the lamp
+    does not swing round at dusk), and a hint names that north; with the
+    scene's north right there is no such hint."""
+    Sunlight = trackfile.Sunlight
+    clock = {f: (40.0 + 4.0 * f, 200.0 + 5.0 * f) for f in range(1, 9)}
+
+    def run(north_off):
+        raws = [RawSun(f, clock[f][0] + 0.2, clock[f][1] + north_off, confidence=0.9,
+                       sunlight=Sunlight.YES, tracked=_Tracked(0.01), clock_sun=clock[f])
+                for f in clock]
+        raws.append(RawSun(9, confidence=0.0, sunlight=Sunlight.NO, clock_sun=(93.0, 250.0),
+                           clock_night=True))
+        track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                        "smoothing": "two_pass"})
+        finish.finish(None, track, raws, estimate_options.EstimateOptions(), None, None,
+                      [[r.frame for r in raws]])
+        return track, {f.frame: f for f in track.frames}
+
+    track, by_frame = run(40.0)
+    assert all(not by_frame[f].predicted for f in clock)
+    assert by_frame[9].predicted and by_frame[9].zenith_deg == 93.0
+    assert by_frame[9].azimuth_deg == pytest.approx(290.0)
+    hint = track.problem("north")
+    assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
+    assert "+40.0 deg" in hint.message and "North Offset" in hint.message
+    assert track.problem("prediction") is None
+
+    track, by_frame = run(0.0)
+    assert track.problem("north") is None and by_frame[9].azimuth_deg == 250.0
