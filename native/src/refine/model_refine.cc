@@ -119,13 +119,7 @@ class Projector {
     Eigen::Matrix<T, 3, 1> x;
     ceres::AngleAxisRotatePoint(c, in_cam.data(), x.data());
     if (x.z() <= T(1e-6)) return false;
-    const T f = exp(c[3]);
-    const Eigen::Matrix3d& K = camera_.K();
-    const Eigen::Matrix<T, 2, 1> ideal(
-        f * (K(0, 0) * x.x() + K(0, 1) * x.y()) / x.z() + K(0, 2),
-        f * K(1, 1) * x.y() / x.z() + K(1, 2));
-    *px =
-        camera_.distortion() ? camera_.distortion()->Distort(ideal, f) : ideal;
+    *px = camera_.CamPointToPixel(x, T(exp(c[3])));
     return true;
   }
 

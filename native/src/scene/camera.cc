@@ -169,8 +169,7 @@ bool Camera::WorldToPixel(const Eigen::Vector3d& point_in_world,
                           Eigen::Vector2d* pixel) const {
   const Eigen::Vector3d point_in_cam = cam_from_world_ * point_in_world;
   if (!(point_in_cam.z() > 0)) return false;
-  const Eigen::Vector2d ideal = (K_ * point_in_cam).hnormalized();
-  *pixel = distortion_ ? distortion_->Distort(ideal) : ideal;
+  *pixel = CamPointToPixel(point_in_cam, 1.0);
   return true;
 }
 

@@ -110,6 +110,21 @@ class Camera {
   // Returns false (and leaves *pixel unset) when the point is not in front.
   bool WorldToPixel(const Eigen::Vector3d& point_in_world,
                     Eigen::Vector2d* pixel) const;
+  // A point in front of the camera, in the camera frame -> recorded pixel,
+  // with both focal lengths scaled by focal_scale (1: this camera); for any
+  // scalar (the model refinement differentiates it with Ceres's Jets).
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> CamPointToPixel(
+      const Eigen::Matrix<T, 3, 1>& point_in_cam, const T& focal_scale) const {
+    const T& x = point_in_cam.x();
+    const T& y = point_in_cam.y();
+    const T& z = point_in_cam.z();
+    const T w = K_(2, 0) * x + K_(2, 1) * y + K_(2, 2) * z;
+    const Eigen::Matrix<T, 2, 1> ideal(
+        (focal_scale * (K_(0, 0) * x + K_(0, 1) * y) + K_(0, 2) * z) / w,
+        (focal_scale * (K_(1, 0) * x + K_(1, 1) * y) + K_(1, 2) * z) / w);
+    return distortion_ ? distortion_->Distort(ideal, focal_scale) : ideal;
+  }
   // Depth along the optical axis (metres, > 0 in front).
   double Depth(const Eigen::Vector3d& point_in_world) const;
 
