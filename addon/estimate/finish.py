@@ -141,14 +141,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     north_turn = _clock_north_turn(raws)
     contradicted = 0
     if unexplained:
-        kept = [_off_the_clock(r, north_turn) for r in raws]
-        set_aside = {k.frame: k.reason for k, r in zip(kept, raws) if k is not r}
-        contradicted = len(set_aside)
-        if track.initial and track.initial.get("frame") in set_aside:
-            # The initial Sun is that frame's measured Sun: set aside alike.
-            track.initial["confidence"] = 0.0
-            track.initial["message"] = f"set aside: {set_aside[track.initial['frame']]}"
-        raws = kept
+        raws, contradicted = _set_aside_off_the_clock(track, raws, north_turn)
     smoothed = None
     if options.smoothing == "physical":
         smoothed, north = _physical(native, track, numbers, raws, options, north)
@@ -237,36 +230,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # contradicts, set aside above.
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or unexplained) for r in raws]
-    if north_turn is not None:
-        track.report("north", trackfile.ProblemKind.HINT,
-                     f"the measured Suns agree with the ephemeris at their times and place in "
-                     f"a north {north_turn:+.1f} deg from the scene's (north offset "
-                     f"{track.north_offset_deg + north_turn:.1f} deg against "
-                     f"{track.north_offset_deg:.1f}): the frames the ephemeris predicts take "
-                     f"its Sun in that north. If the measured Suns are right, set the Sun "
-                     f"Position add-on's North Offset to it: the track's azimuths are "
-                     f"measured from the scene's north")
-    daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
-    if daytime:
-        # The note names the north the predictions are in: a turn the
-        # measured Suns agree on is applied below however small it is.
-        north_said = (
-            f"in the scene's north (north offset {track.north_offset_deg:.1f} deg: the Sun "
-            f"Position add-on's North Offset; set it if north is elsewhere)"
-            if north_turn is None else
-            f"in the north the measured Suns agree on (north offset "
-            f"{track.north_offset_deg + north_turn:.1f} deg, against the scene's "
-            f"{track.north_offset_deg:.1f}; see the north hint)")
-        track.report("prediction", trackfile.ProblemKind.HINT,
-                     ("the Sun was measured on too few frames for its path to bound the others: "
-                      if few_measured else
-                      "the model's shadows miss the footage's (see the model's hint), so the "
-                      "path through its measured Suns does not bound the others: ")
-                     + f"{len(daytime)} frame(s) ({trackfile.frame_ranges(daytime)}) take the "
-                     f"ephemeris's Sun at their time and place"
-                     + (f" ({contradicted} of them had a measured Sun more than "
-                        f"{CLOCK_SLACK_DEG:.0f} deg from it)" if contradicted else "")
-                     + f", {north_said}")
+    _report_clock(track, raws, by_ephemeris, north_turn, few_measured, contradicted)
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = by_ephemeris[k]
         if by_clock:
@@ -443,6 +407,56 @@ def _clock_off_deg(sun: Tuple[float, float], clock_sun: Tuple[float, float],
     return angles.angle_between_deg(
         angles.sun_in_world_from_angles(*sun),
         angles.sun_in_world_from_angles(clock_sun[0], clock_sun[1] + (north_turn or 0.0)))
+
+
+def _set_aside_off_the_clock(track: trackfile.Track, raws: List[RawSun],
+                             north_turn: Optional[float]) -> Tuple[List[RawSun], int]:
+    """The raw Suns with those the clock contradicts set aside
+    (_off_the_clock), and how many; the track's initial Sun goes with its
+    frame's."""
+    kept = [_off_the_clock(r, north_turn) for r in raws]
+    set_aside = {k.frame: k.reason for k, r in zip(kept, raws) if k is not r}
+    if track.initial and track.initial.get("frame") in set_aside:
+        # The initial Sun is that frame's measured Sun: set aside alike.
+        track.initial["confidence"] = 0.0
+        track.initial["message"] = f"set aside: {set_aside[track.initial['frame']]}"
+    return kept, len(set_aside)
+
+
+def _report_clock(track: trackfile.Track, raws: Sequence[RawSun], by_ephemeris: Sequence[bool],
+                  north_turn: Optional[float], few_measured: bool, contradicted: int) -> None:
+    """The hints of the clock's rules: the north the measured Suns agree on,
+    and the daytime frames the ephemeris predicts."""
+    if north_turn is not None:
+        track.report("north", trackfile.ProblemKind.HINT,
+                     f"the measured Suns agree with the ephemeris at their times and place in "
+                     f"a north {north_turn:+.1f} deg from the scene's (north offset "
+                     f"{track.north_offset_deg + north_turn:.1f} deg against "
+                     f"{track.north_offset_deg:.1f}): the frames the ephemeris predicts take "
+                     f"its Sun in that north. If the measured Suns are right, set the Sun "
+                     f"Position add-on's North Offset to it: the track's azimuths are "
+                     f"measured from the scene's north")
+    daytime = [r.frame for r, e in zip(raws, by_ephemeris) if e and not r.clock_night]
+    if daytime:
+        # The note names the north the predictions are in: a turn the
+        # measured Suns agree on is applied however small it is.
+        north_said = (
+            f"in the scene's north (north offset {track.north_offset_deg:.1f} deg: the Sun "
+            f"Position add-on's North Offset; set it if north is elsewhere)"
+            if north_turn is None else
+            f"in the north the measured Suns agree on (north offset "
+            f"{track.north_offset_deg + north_turn:.1f} deg, against the scene's "
+            f"{track.north_offset_deg:.1f}; see the north hint)")
+        track.report("prediction", trackfile.ProblemKind.HINT,
+                     ("the Sun was measured on too few frames for its path to bound the others: "
+                      if few_measured else
+                      "the model's shadows miss the footage's (see the model's hint), so the "
+                      "path through its measured Suns does not bound the others: ")
+                     + f"{len(daytime)} frame(s) ({trackfile.frame_ranges(daytime)}) take the "
+                     f"ephemeris's Sun at their time and place"
+                     + (f" ({contradicted} of them had a measured Sun more than "
+                        f"{CLOCK_SLACK_DEG:.0f} deg from it)" if contradicted else "")
+                     + f", {north_said}")
 
 
 def _off_the_clock(r: RawSun, north_turn: Optional[float]) -> RawSun:
