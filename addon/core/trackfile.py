@@ -99,7 +99,7 @@ class ProblemKind(str, Enum):
 class Problem:
     """Something a stage of the run reports to the user, in their words.
     stage: "estimate", "tracking", "smoothing", "model", "times", "confidence",
-    "prediction", "north" (docs/track-format.md)."""
+    "prediction", "clock" (docs/track-format.md)."""
     stage: str
     kind: ProblemKind
     message: str

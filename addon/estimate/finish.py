@@ -4,7 +4,7 @@ physical) within each segment's span, and the track's frames filled."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -132,13 +132,14 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     refined = bool((track.extra.get("model_refinement") or {}).get("used"))
     misfits = calibration.model_doubted(misfit)  # whatever the refinement
     model_off = calibration.model_doubted(misfit, refined)
-    # The measured Suns may say where north is (_clock_north_turn); in a
+    # The measured Suns may say where north is (_clock_north); in a
     # clip the estimate does not explain (its Sun seldom measured, or its
     # model's shadows missing the footage's), a measured Sun the clock
     # contradicts is set aside before any smoothing (_off_the_clock).
     few_measured = calibration.clip_doubted(share)
     unexplained = few_measured or model_off
-    north_turn = _clock_north_turn(raws)
+    clock_north = _clock_north(raws)
+    north_turn = clock_north.turn
     contradicted = 0
     if unexplained:
         raws, contradicted = _set_aside_off_the_clock(track, raws, north_turn)
@@ -155,6 +156,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                     track.initial["azimuth_deg"] + turn)
             track.north_offset_deg = north
             north_turn = None  # the fitted north is the ephemeris's
+            clock_north = ClockNorth()  # and the fit measured it
     if smoothed is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle,
@@ -230,7 +232,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # contradicts, set aside above.
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or unexplained) for r in raws]
-    _report_clock(track, raws, by_ephemeris, north_turn, few_measured, contradicted)
+    _report_clock(track, raws, by_ephemeris, clock_north, north_turn, few_measured,
+                  contradicted)
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = by_ephemeris[k]
         if by_clock:
@@ -375,14 +378,28 @@ CLOCK_NORTH_SHARE = 0.5
 CLOCK_NORTH_CANDIDATES = 200
 
 
-def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
-    """The turn (deg, added to the ephemeris's geographic azimuths) on which
-    the measured Suns agree (see CLOCK_NORTH_FRAMES), or None."""
+@dataclass(frozen=True)
+class ClockNorth:
+    """How the measured Suns stand against the ephemeris (_clock_north)."""
+    turn: Optional[float] = None  # deg added to its azimuths: the north they agree on
+    measured: int = 0             # measured Suns with the clock's Sun 10-80 deg up
+    kept: int = 0                 # of them within CLOCK_SLACK_DEG of it (turned by turn)
+
+    @property
+    def contradicted(self) -> bool:
+        """Enough of them to tell, and most far from it whatever north."""
+        return self.measured >= CLOCK_NORTH_FRAMES and \
+            self.kept < CLOCK_NORTH_SHARE * self.measured
+
+
+def _clock_north(raws: Sequence[RawSun]) -> ClockNorth:
+    """The turn of the ephemeris's geographic azimuths on which the measured
+    Suns agree (see CLOCK_NORTH_FRAMES), and how many it keeps."""
     measured = [((r.zenith_deg, r.azimuth_deg), r.clock_sun) for r in raws
                 if r.zenith_deg is not None and r.azimuth_deg is not None
                 and r.clock_sun is not None and 10.0 <= r.clock_sun[0] <= 80.0]
     if len(measured) < CLOCK_NORTH_FRAMES:
-        return None
+        return ClockNorth(measured=len(measured))
     turns = np.array([float(angles.wrap_signed_deg(sun[1] - clock_sun[1]))
                       for sun, clock_sun in measured])
     # The circular median: the measured turn nearest all others, among at
@@ -396,8 +413,10 @@ def _clock_north_turn(raws: Sequence[RawSun]) -> Optional[float]:
     def kept(t: float) -> int:
         return sum(_clock_off_deg(sun, clock_sun, t) <= CLOCK_SLACK_DEG
                    for sun, clock_sun in measured)
-    found = kept(turn)
-    return turn if found >= CLOCK_NORTH_SHARE * len(measured) and found > kept(0.0) else None
+    found, unturned = kept(turn), kept(0.0)
+    if found >= CLOCK_NORTH_SHARE * len(measured) and found > unturned:
+        return ClockNorth(turn, len(measured), found)
+    return ClockNorth(None, len(measured), unturned)
 
 
 def _clock_off_deg(sun: Tuple[float, float], clock_sun: Tuple[float, float],
@@ -424,11 +443,19 @@ def _set_aside_off_the_clock(track: trackfile.Track, raws: List[RawSun],
 
 
 def _report_clock(track: trackfile.Track, raws: Sequence[RawSun], by_ephemeris: Sequence[bool],
-                  north_turn: Optional[float], few_measured: bool, contradicted: int) -> None:
+                  clock_north: ClockNorth, north_turn: Optional[float], few_measured: bool,
+                  contradicted: int) -> None:
     """The hints of the clock's rules: the north the measured Suns agree on,
-    and the daytime frames the ephemeris predicts."""
+    or that most of them agree with the ephemeris in no north; and the
+    daytime frames the ephemeris predicts."""
+    if clock_north.contradicted:
+        track.report("clock", trackfile.ProblemKind.HINT,
+                     f"{clock_north.measured - clock_north.kept} of {clock_north.measured} "
+                     f"measured Suns are more than {CLOCK_SLACK_DEG:.0f} deg from the "
+                     f"ephemeris's at their times and place, in any north: the model "
+                     f"(its casters, the camera), the times (their zone) or the place is off")
     if north_turn is not None:
-        track.report("north", trackfile.ProblemKind.HINT,
+        track.report("clock", trackfile.ProblemKind.HINT,
                      f"the measured Suns agree with the ephemeris at their times and place in "
                      f"a north {north_turn:+.1f} deg from the scene's (north offset "
                      f"{track.north_offset_deg + north_turn:.1f} deg against "
@@ -446,7 +473,7 @@ def _report_clock(track: trackfile.Track, raws: Sequence[RawSun], by_ephemeris: 
             if north_turn is None else
             f"in the north the measured Suns agree on (north offset "
             f"{track.north_offset_deg + north_turn:.1f} deg, against the scene's "
-            f"{track.north_offset_deg:.1f}; see the north hint)")
+            f"{track.north_offset_deg:.1f}; see the clock hint)")
         track.report("prediction", trackfile.ProblemKind.HINT,
                      ("the Sun was measured on too few frames for its path to bound the others: "
                       if few_measured else

@@ -492,9 +492,9 @@ def test_the_measured_suns_north_is_their_circular_median_on_a_long_clip_too():
     def suns(turn_of):
         return [RawSun(f, 45.0, (200.0 + turn_of(f)) % 360.0, confidence=0.9,
                        sunlight=Sunlight.YES, clock_sun=(45.0, 200.0)) for f in range(5000)]
-    turn = finish._clock_north_turn(suns(lambda f: 178.0 + rng.uniform(-3.0, 3.0)))
+    turn = finish._clock_north(suns(lambda f: 178.0 + rng.uniform(-3.0, 3.0))).turn
     assert turn is not None and abs(((turn - 178.0) + 180.0) % 360.0 - 180.0) < 0.5
-    assert finish._clock_north_turn(suns(lambda f: rng.uniform(-180.0, 180.0))) is None
+    assert finish._clock_north(suns(lambda f: rng.uniform(-180.0, 180.0))).turn is None
 
 
 def test_a_clip_whose_model_misses_the_footage_takes_the_ephemeris_where_the_clock_says_so():
@@ -552,16 +552,18 @@ def test_the_north_the_measured_suns_agree_on_needs_half_of_them_and_more_than_t
     # 7 of 10 within 3 deg of the ephemeris turned by 85 deg, 3 far off.
     rough = [(45.0 + rng.uniform(-3, 3), 285.0 + rng.uniform(-3, 3)) for _ in range(7)]
     rough += [(45.0 + 20.0, 285.0 + 40.0 * k) for k in (1, 2, 3)]
-    turn = finish._clock_north_turn(suns(rough))
+    turn = finish._clock_north(suns(rough)).turn
     assert turn is not None and abs(turn - 85.0) < 3.5
     # 4 of 10 agree: no north.
     few = rough[:4] + [(45.0 + 20.0, 285.0 + 25.0 * k) for k in range(1, 7)]
-    assert finish._clock_north_turn(suns(few)) is None
+    assert finish._clock_north(suns(few)).turn is None
     scattered = [(rng.uniform(5, 85), rng.uniform(0, 360)) for _ in range(12)]
-    assert finish._clock_north_turn(suns(scattered)) is None
+    scattered_north = finish._clock_north(suns(scattered))
+    assert scattered_north.turn is None and scattered_north.contradicted
     # Suns on the ephemeris, one 8 deg away in azimuth: the median turn
     # (0 here) keeps no more than the scene's north does.
-    assert finish._clock_north_turn(suns([(45.0, 200.0)] * 4 + [(45.0, 208.0)])) is None
+    on_it = finish._clock_north(suns([(45.0, 200.0)] * 4 + [(45.0, 208.0)]))
+    assert on_it.turn is None and not on_it.contradicted and on_it.kept == 5
 
 
 def test_night_frames_take_the_ephemeris_in_the_north_the_measured_suns_agree_on():
@@ -574,8 +576,8 @@ def test_night_frames_take_the_ephemeris_in_the_north_the_measured_suns_agree_on
     Sunlight = trackfile.Sunlight
     clock = {f: (40.0 + 4.0 * f, 200.0 + 5.0 * f) for f in range(1, 9)}
 
-    def run(north_off):
-        raws = [RawSun(f, clock[f][0] + 0.2, clock[f][1] + north_off, confidence=0.9,
+    def run(north_off, higher=0.0):
+        raws = [RawSun(f, clock[f][0] + 0.2 - higher, clock[f][1] + north_off, confidence=0.9,
                        sunlight=Sunlight.YES, tracked=_Tracked(0.01), clock_sun=clock[f])
                 for f in clock]
         raws.append(RawSun(9, confidence=0.0, sunlight=Sunlight.NO, clock_sun=(93.0, 250.0),
@@ -590,10 +592,16 @@ def test_night_frames_take_the_ephemeris_in_the_north_the_measured_suns_agree_on
     assert all(not by_frame[f].predicted for f in clock)
     assert by_frame[9].predicted and by_frame[9].zenith_deg == 93.0
     assert by_frame[9].azimuth_deg == pytest.approx(290.0)
-    hint = track.problem("north")
+    hint = track.problem("clock")
     assert hint is not None and hint.kind == trackfile.ProblemKind.HINT
     assert "+40.0 deg" in hint.message and "North Offset" in hint.message
     assert track.problem("prediction") is None
 
     track, by_frame = run(0.0)
-    assert track.problem("north") is None and by_frame[9].azimuth_deg == 250.0
+    assert track.problem("clock") is None and by_frame[9].azimuth_deg == 250.0
+
+    # Measured Suns 25 deg higher than the ephemeris's: no north, a hint.
+    track, by_frame = run(0.0, higher=25.0)
+    hint = track.problem("clock")
+    assert hint is not None and hint.message.startswith("8 of 8 measured Suns are more than")
+    assert by_frame[9].azimuth_deg == 250.0
