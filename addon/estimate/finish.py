@@ -139,10 +139,9 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     few_measured = calibration.clip_doubted(share)
     unexplained = few_measured or model_off
     clock_north = _clock_north(raws)
-    north_turn = clock_north.turn
     contradicted = 0
     if unexplained:
-        raws, contradicted = _set_aside_off_the_clock(track, raws, north_turn)
+        raws, contradicted = _set_aside_off_the_clock(track, raws, clock_north.turn)
     smoothed = None
     if options.smoothing == "physical":
         smoothed, north = _physical(native, track, numbers, raws, options, north)
@@ -155,8 +154,7 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
                 track.initial["azimuth_deg"] = angles.wrap_azimuth_deg(
                     track.initial["azimuth_deg"] + turn)
             track.north_offset_deg = north
-            north_turn = None  # the fitted north is the ephemeris's
-            clock_north = ClockNorth()  # and the fit measured it
+            clock_north = ClockNorth()  # the fitted north is the ephemeris's
     if smoothed is None:
         mode = "two_pass" if options.smoothing == "physical" else options.smoothing
         smoothed = _smooth_segments(numbers, raws, segments, mode, options, times, circle,
@@ -232,14 +230,13 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # contradicts, set aside above.
     by_ephemeris = [_predicted(r) and r.clock_sun is not None and
                     (r.clock_night or unexplained) for r in raws]
-    _report_clock(track, raws, by_ephemeris, clock_north, north_turn, few_measured,
-                  contradicted)
+    _report_clock(track, raws, by_ephemeris, clock_north, few_measured, contradicted)
     for k, (r, z_s, a_s) in enumerate(zip(raws, *smoothed)):
         by_clock = by_ephemeris[k]
         if by_clock:
             z_s, a_s = r.clock_sun
-            if north_turn is not None:
-                a_s = angles.wrap_azimuth_deg(a_s + north_turn)
+            if clock_north.turn is not None:
+                a_s = angles.wrap_azimuth_deg(a_s + clock_north.turn)
         predicted = _predicted(r) and z_s is not None and a_s is not None
         reason = r.reason
         if predicted:
@@ -351,17 +348,17 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None,
     return zs, azs
 
 
-# In a seldom-measured clip, a measured Sun more than this far from the
-# ephemeris's is not the Sun's: the clock is trusted there (whole_clip's
+# In a clip the estimate does not explain, a measured Sun more than this far
+# from the ephemeris's is not the Sun's: the clock is trusted there (whole_clip's
 # CLOCK_WRONG check), and so is the north the ephemeris is turned to (the
 # measured Suns' own where they agree on one, else the scene's). On the
 # AMOS webcams the measured Suns were 0.8-50 deg off in zenith and 5-165 deg
 # in azimuth, the scenes' north measured.
 CLOCK_SLACK_DEG = 10.0
 
-# The measured Suns of a clip the estimate does not explain tell whether
-# the scene's north offset holds: if only north is off, one turn of the
-# ephemeris's azimuths takes them onto the measured ones. Their circular
+# The measured Suns tell whether the scene's north offset holds: if only
+# north is off, one turn of the ephemeris's azimuths takes them onto the
+# measured ones. Their circular
 # median turn is north when it keeps (within CLOCK_SLACK_DEG) at least
 # CLOCK_NORTH_SHARE of CLOCK_NORTH_FRAMES or more measured frames with the
 # clock's Sun 10-80 deg up, and more of them than the scene's north does;
@@ -443,11 +440,11 @@ def _set_aside_off_the_clock(track: trackfile.Track, raws: List[RawSun],
 
 
 def _report_clock(track: trackfile.Track, raws: Sequence[RawSun], by_ephemeris: Sequence[bool],
-                  clock_north: ClockNorth, north_turn: Optional[float], few_measured: bool,
-                  contradicted: int) -> None:
+                  clock_north: ClockNorth, few_measured: bool, contradicted: int) -> None:
     """The hints of the clock's rules: the north the measured Suns agree on,
     or that most of them agree with the ephemeris in no north; and the
     daytime frames the ephemeris predicts."""
+    north_turn = clock_north.turn
     if clock_north.contradicted:
         track.report("clock", trackfile.ProblemKind.HINT,
                      f"{clock_north.measured - clock_north.kept} of {clock_north.measured} "
