@@ -3,6 +3,7 @@ physical) within each segment's span, and the track's frames filled."""
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 from dataclasses import dataclass, replace
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -139,6 +140,14 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     few_measured = calibration.clip_doubted(share)
     unexplained = few_measured or model_off
     clock_north = _clock_north(raws)
+    # Times a whole number of hours off (a zone, daylight saving) can pass
+    # for a north turn (an hour near noon is mostly azimuth): when shifted
+    # times explain the measured Suns better, the clock's daytime rules are
+    # not used and the hint names the shift.
+    times_off = _clock_shift(native, raws, times, options)
+    if times_off is not None:
+        clock_north = ClockNorth(None, clock_north.measured, clock_north.kept, times_off)
+        unexplained = False
     contradicted = 0
     if unexplained:
         raws, contradicted = _set_aside_off_the_clock(track, raws, clock_north.turn)
@@ -381,6 +390,8 @@ class ClockNorth:
     turn: Optional[float] = None  # deg added to its azimuths: the north they agree on
     measured: int = 0             # measured Suns with the clock's Sun 10-80 deg up
     kept: int = 0                 # of them within CLOCK_SLACK_DEG of it (turned by turn)
+    # Hours the capture times look off by (_clock_shift), or None.
+    times_off_hours: Optional[int] = None
 
     @property
     def contradicted(self) -> bool:
@@ -407,13 +418,57 @@ def _clock_north(raws: Sequence[RawSun]) -> ClockNorth:
     cost = np.abs(angles.wrap_signed_deg(turns[None, :] - candidates[:, None])).sum(axis=1)
     turn = float(candidates[int(np.argmin(cost))])
 
+    suns = angles.sun_in_world_from_angles(*np.array([sun for sun, _ in measured]).T)
+    zenith, azimuth = np.array([clock_sun for _, clock_sun in measured]).T
+    near = math.cos(math.radians(CLOCK_SLACK_DEG))
+
     def kept(t: float) -> int:
-        return sum(_clock_off_deg(sun, clock_sun, t) <= CLOCK_SLACK_DEG
-                   for sun, clock_sun in measured)
+        ephemeris = angles.sun_in_world_from_angles(zenith, azimuth + t)
+        return int(np.count_nonzero(np.einsum("ij,ij->i", suns, ephemeris) >= near))
     found, unturned = kept(turn), kept(0.0)
     if found >= CLOCK_NORTH_SHARE * len(measured) and found > unturned:
         return ClockNorth(turn, len(measured), found)
     return ClockNorth(None, len(measured), unturned)
+
+
+# Whole hours the capture times may be off by (a zone, daylight saving):
+# when most measured Suns are far from the ephemeris in any north, the
+# ephemeris is tried at times shifted by each.
+CLOCK_SHIFT_MAX_HOURS = 12
+# Measured Suns the shifts are tried on at most, spread over the clip (the
+# ephemeris costs a native call a frame and a shift).
+CLOCK_SHIFT_FRAMES = 48
+# The times given keeping this share of them, no shift is tried (a shift of
+# an hour moves the Sun up to 15 deg: it keeps no more of them).
+CLOCK_SHIFT_NEEDLESS = 0.9
+
+
+def _clock_shift(native, raws: Sequence[RawSun], times, options: EstimateOptions) -> Optional[int]:
+    """The whole-hour shift of the capture times under which the ephemeris
+    keeps (in a north of their own or the scene's) at least
+    CLOCK_NORTH_SHARE of the measured Suns, the most of them and more than
+    at the times given; None (no native core, no times or place, as in a
+    unit test, fewer than CLOCK_NORTH_FRAMES measured Suns, or no shift
+    does)."""
+    lat, lon = options.latitude_deg, options.longitude_deg
+    if native is None or times is None or lat is None or lon is None:
+        return None
+    picked = [(r, t) for r, t in zip(raws, times) if r.zenith_deg is not None
+              and r.azimuth_deg is not None and r.clock_sun is not None]
+    if len(picked) < CLOCK_NORTH_FRAMES:
+        return None
+    picked = picked[::max(1, len(picked) // CLOCK_SHIFT_FRAMES)]
+    best, best_kept = None, _clock_north([r for r, _ in picked]).kept
+    if best_kept >= CLOCK_SHIFT_NEEDLESS * len(picked):
+        return None
+    # The smallest shift first: of shifts that keep as many, it is kept.
+    for hours in sorted(range(-CLOCK_SHIFT_MAX_HOURS, CLOCK_SHIFT_MAX_HOURS + 1), key=abs)[1:]:
+        later = dt.timedelta(hours=hours)
+        kept = _clock_north([replace(r, clock_sun=ephemeris_sun(native, t + later, lat, lon))
+                             for r, t in picked]).kept
+        if kept >= CLOCK_NORTH_SHARE * len(picked) and kept > best_kept:
+            best, best_kept = hours, kept
+    return best
 
 
 def _clock_off_deg(sun: Tuple[float, float], clock_sun: Tuple[float, float],
@@ -441,16 +496,25 @@ def _set_aside_off_the_clock(track: trackfile.Track, raws: List[RawSun],
 
 def _report_clock(track: trackfile.Track, raws: Sequence[RawSun], by_ephemeris: Sequence[bool],
                   clock_north: ClockNorth, few_measured: bool, contradicted: int) -> None:
-    """The hints of the clock's rules: the north the measured Suns agree on,
-    or that most of them agree with the ephemeris in no north; and the
-    daytime frames the ephemeris predicts."""
+    """The hints of the clock's rules: times that look whole hours off, the
+    north the measured Suns agree on, or that most of them agree with the
+    ephemeris in no north; and the daytime frames the ephemeris predicts."""
     north_turn = clock_north.turn
-    if clock_north.contradicted:
+    shift = clock_north.times_off_hours
+    if shift is not None:
+        track.report("clock", trackfile.ProblemKind.HINT,
+                     f"the measured Suns agree with the ephemeris better {abs(shift)} h "
+                     f"{'after' if shift > 0 else 'before'} their capture times than at them: "
+                     f"the times look {abs(shift)} h off (a time zone or daylight-saving "
+                     f"mistake? times without a zone of their own are read in the panel's "
+                     f"Time Zone or --utc-offset, else as UTC), so the ephemeris bounds no "
+                     f"daytime frame and turns no north")
+    elif clock_north.contradicted:
         track.report("clock", trackfile.ProblemKind.HINT,
                      f"{clock_north.measured - clock_north.kept} of {clock_north.measured} "
                      f"measured Suns are more than {CLOCK_SLACK_DEG:.0f} deg from the "
-                     f"ephemeris's at their times and place, in any north: the model "
-                     f"(its casters, the camera), the times (their zone) or the place is off")
+                     f"ephemeris's at their times and place, in any north: the model (its "
+                     f"casters, the camera), the times (their zone) or the place is off")
     if north_turn is not None:
         track.report("clock", trackfile.ProblemKind.HINT,
                      f"the measured Suns agree with the ephemeris at their times and place in "

@@ -161,6 +161,8 @@ NOT_COPIES = {
                                           "frames a stream queues",
     "estimate.finish.CLOCK_NORTH_SHARE": "a share of the measured Suns the ephemeris keeps, "
                                          "not of the Suns a circle holds",
+    "estimate.finish.CLOCK_SHIFT_MAX_HOURS": "hours a clock may be off by, not pixels or a "
+                                             "path's step in degrees",
 }
 
 

@@ -1,6 +1,7 @@
 """Confidence as a probability (issue 25 item 4): the fit that makes it one
 (core.evaluation.isotonic_fit, run by bench/calibrate.py), the map the
 estimate applies (estimate.calibration) and where it applies it."""
+import datetime as dt
 import importlib.util
 import json
 import os
@@ -605,3 +606,37 @@ def test_night_frames_take_the_ephemeris_in_the_north_the_measured_suns_agree_on
     hint = track.problem("clock")
     assert hint is not None and hint.message.startswith("8 of 8 measured Suns are more than")
     assert by_frame[9].azimuth_deg == 250.0
+
+
+def test_a_clock_an_hour_off_is_named():
+    """Measured Suns that agree with the ephemeris an hour after their
+    capture times (a daylight-saving mistake): the clock hint says the times
+    look 1 h off; Suns that agree with it at no time get the general hint."""
+    native = pytest.importorskip("_native")
+    Sunlight = trackfile.Sunlight
+    lat, lon = 45.0, 5.0
+    times = [dt.datetime(2025, 6, 21, 6, tzinfo=dt.timezone.utc) + dt.timedelta(minutes=30 * k)
+             for k in range(16)]
+
+    def run(measured_at, misfit=0.01):
+        raws = [RawSun(k + 1, *measured_at(k, t), confidence=0.9, sunlight=Sunlight.YES,
+                       tracked=_Tracked(misfit),
+                       clock_sun=finish.ephemeris_sun(native, t, lat, lon))
+                for k, t in enumerate(times)]
+        track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
+                                        "smoothing": "two_pass"})
+        options = estimate_options.EstimateOptions(latitude_deg=lat, longitude_deg=lon)
+        finish.finish(native, track, raws, options, times, None, [[r.frame for r in raws]])
+        return track
+
+    def an_hour_late(k, t):
+        return finish.ephemeris_sun(native, t + dt.timedelta(hours=1), lat, lon)
+    hint = run(an_hour_late).problem("clock")
+    assert hint is not None and "1 h after their capture times" in hint.message
+    assert "1 h off" in hint.message
+    # Such a clock sets no measured Sun aside, even where the model is doubted.
+    track = run(an_hour_late, misfit=calibration.MODEL_MISFIT_MAX + 0.1)
+    assert "1 h off" in track.problem("clock").message and track.problem("prediction") is None
+    assert not any(f.predicted for f in track.frames)
+    hint = run(lambda k, t: (20.0 + 3.0 * k, (170.0 + 97.0 * k) % 360.0)).problem("clock")
+    assert hint is not None and "h off" not in hint.message and "the place is off" in hint.message
