@@ -200,21 +200,24 @@ def render(key, spec, cache, log_dir):
     return key, folder, time.perf_counter() - t0, None
 
 
-def times_csv(folder, path):
-    """The truth's local capture times as a times file (frame,local_time)."""
+def times_csv(folder, path, off_hours=0.0):
+    """The truth's local capture times as a times file (frame,local_time),
+    each `off_hours` later than it was (a user's zone mistake)."""
     truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
+    later = dt.timedelta(hours=off_hours)
     with open(path, "w") as fh:
         fh.write("frame,local_time\n")
         for f, t in zip(truth.frames, truth.extra["local_times"]):
-            fh.write(f"{f.frame},{t}\n")
+            fh.write(f"{f.frame},{(dt.datetime.fromisoformat(t) + later).isoformat()}\n")
     return path
 
 
 def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, uncalibrated=False,
-             extra=(), place=False):
+             extra=(), place=False, clock_off_hours=0.0):
     """Runs the estimate on the scene's scene.blend (a "<key>/true" twin: on
     its scene_true.blend); `times` passes the truth's capture times, and
-    `place` its latitude and longitude too (rounded, as a user types them);
+    `place` its latitude and longitude too (rounded, as a user types them),
+    the times `clock_off_hours` late;
     `uncalibrated` asks for the estimator's support as confidence; `extra`:
     more flags of run_estimate.py."""
     twin = key.endswith(TRUE_SUFFIX)
@@ -228,7 +231,8 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, unca
         args.append("--uncalibrated-confidence")
     args += list(extra)
     if times or place:
-        args += ["--times", times_csv(folder, os.path.join(out_dir, f"{name}.times.csv"))]
+        args += ["--times", times_csv(folder, os.path.join(out_dir, f"{name}.times.csv"),
+                                      clock_off_hours)]
     if place and smoothing != "physical":
         where = trackfile.read_track(os.path.join(folder, "truth.sun.json")).extra["place"]
         args += ["--latitude", str(round(where["latitude_deg"], 2)),
@@ -517,6 +521,9 @@ def main(argv=None):
     p.add_argument("--clock", action="store_true",
                    help="give every member its capture times and its place (latitude and "
                         "longitude), as a user who knows them would")
+    p.add_argument("--clock-off-hours", type=float, default=0.0,
+                   help="with --clock: the times given that many hours late (a zone or "
+                        "daylight-saving mistake), to see that the run names it")
     p.add_argument("--seeds", type=parse_seeds,
                    help="exactly these scenes instead: e.g. 1,4,10-12,plaza14,twilight1-3,"
                         "rough1-6")
@@ -544,6 +551,8 @@ def main(argv=None):
                         help="the runs use the model as it is (run_estimate.py "
                              "--no-refine-model)")
     args = p.parse_args(argv)
+    if args.clock_off_hours and not args.clock:
+        p.error("--clock-off-hours needs --clock")
     if args.scenes < 1:
         p.error(f"--scenes must be at least 1, got {args.scenes}")
     for flag in ("twilight",) + tuple(KINDS):
@@ -619,7 +628,7 @@ def main(argv=None):
                                         args.uncalibrated_confidence,
                                         ["--refine-model"] if args.refine_model else
                                         ["--no-refine-model"] if args.no_refine_model else [],
-                                        place=args.clock)
+                                        place=args.clock, clock_off_hours=args.clock_off_hours)
             return score(k, folders[base], track, wall, err)
         with cf.ThreadPoolExecutor(args.jobs) as pool:
             rows = list(pool.map(run, runs))
