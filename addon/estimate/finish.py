@@ -400,12 +400,26 @@ class ClockNorth:
             self.kept < CLOCK_NORTH_SHARE * self.measured
 
 
+# (measured Sun, the ephemeris's Sun at its time), each (zenith, azimuth).
+SunPair = Tuple[Tuple[float, float], Tuple[float, float]]
+
+
+def _clock_pairs(raws: Sequence[RawSun]) -> List[SunPair]:
+    """The frames' measured Suns beside the ephemeris's."""
+    return [((r.zenith_deg, r.azimuth_deg), r.clock_sun) for r in raws
+            if r.zenith_deg is not None and r.azimuth_deg is not None
+            and r.clock_sun is not None]
+
+
 def _clock_north(raws: Sequence[RawSun]) -> ClockNorth:
     """The turn of the ephemeris's geographic azimuths on which the measured
     Suns agree (see CLOCK_NORTH_FRAMES), and how many it keeps."""
-    measured = [((r.zenith_deg, r.azimuth_deg), r.clock_sun) for r in raws
-                if r.zenith_deg is not None and r.azimuth_deg is not None
-                and r.clock_sun is not None and 10.0 <= r.clock_sun[0] <= 80.0]
+    return _north_of(_clock_pairs(raws))
+
+
+def _north_of(pairs: Sequence[SunPair]) -> ClockNorth:
+    """_clock_north of (measured, ephemeris) pairs."""
+    measured = [(sun, clock_sun) for sun, clock_sun in pairs if 10.0 <= clock_sun[0] <= 80.0]
     if len(measured) < CLOCK_NORTH_FRAMES:
         return ClockNorth(measured=len(measured))
     turns = np.array([float(angles.wrap_signed_deg(sun[1] - clock_sun[1]))
@@ -418,23 +432,32 @@ def _clock_north(raws: Sequence[RawSun]) -> ClockNorth:
     cost = np.abs(angles.wrap_signed_deg(turns[None, :] - candidates[:, None])).sum(axis=1)
     turn = float(candidates[int(np.argmin(cost))])
 
-    suns = angles.sun_in_world_from_angles(*np.array([sun for sun, _ in measured]).T)
-    zenith, azimuth = np.array([clock_sun for _, clock_sun in measured]).T
-    near = math.cos(math.radians(CLOCK_SLACK_DEG))
-
-    def kept(t: float) -> int:
-        ephemeris = angles.sun_in_world_from_angles(zenith, azimuth + t)
-        return int(np.count_nonzero(np.einsum("ij,ij->i", suns, ephemeris) >= near))
-    found, unturned = kept(turn), kept(0.0)
+    found, unturned = _kept(measured, turn), _kept(measured, 0.0)
     if found >= CLOCK_NORTH_SHARE * len(measured) and found > unturned:
         return ClockNorth(turn, len(measured), found)
     return ClockNorth(None, len(measured), unturned)
 
 
-# Whole hours the capture times may be off by (a zone, daylight saving):
-# when most measured Suns are far from the ephemeris in any north, the
-# ephemeris is tried at times shifted by each.
-CLOCK_SHIFT_MAX_HOURS = 12
+def _kept(measured: Sequence[SunPair], turn: float) -> int:
+    """How many of the (measured Sun, ephemeris's Sun) pairs are within
+    CLOCK_SLACK_DEG of each other, the ephemeris turned by `turn`."""
+    suns = angles.sun_in_world_from_angles(*np.array([sun for sun, _ in measured]).T)
+    zenith, azimuth = np.array([clock_sun for _, clock_sun in measured]).T
+    ephemeris = angles.sun_in_world_from_angles(zenith, azimuth + turn)
+    near = math.cos(math.radians(CLOCK_SLACK_DEG))
+    return int(np.count_nonzero(np.einsum("ij,ij->i", suns, ephemeris) >= near))
+
+
+# Whole hours the capture times may be off by, each way: a daylight-saving
+# or a neighbouring zone's mistake. A clip of a few hours often fits an
+# hour's shift as well as its true times (another north takes it up: 24 of
+# the static 68 given their times kept every measured Sun at +-1 h), so a
+# shift is named only where it fits clearly better; and a Sun the estimate
+# got wrong can fit a shift of many hours (walls1: 96% kept at +7 h, 35% at
+# its true times).
+CLOCK_SHIFT_MAX_HOURS = 2
+# The share of the measured Suns a shift must keep to be named.
+CLOCK_SHIFT_SHARE = 0.75
 # Measured Suns the shifts are tried on at most, spread over the clip (the
 # ephemeris costs a native call a frame and a shift).
 CLOCK_SHIFT_FRAMES = 48
@@ -446,28 +469,36 @@ CLOCK_SHIFT_NEEDLESS = 0.9
 def _clock_shift(native, raws: Sequence[RawSun], times, options: EstimateOptions) -> Optional[int]:
     """The whole-hour shift of the capture times under which the ephemeris
     keeps (in a north of their own or the scene's) at least
-    CLOCK_NORTH_SHARE of the measured Suns, the most of them and more than
+    CLOCK_SHIFT_SHARE of the measured Suns, the most of them and more than
     at the times given; None (no native core, no times or place, as in a
     unit test, fewer than CLOCK_NORTH_FRAMES measured Suns, or no shift
     does)."""
-    lat, lon = options.latitude_deg, options.longitude_deg
-    if native is None or times is None or lat is None or lon is None:
+    if native is None or times is None or options.latitude_deg is None or \
+            options.longitude_deg is None:
         return None
-    picked = [(r, t) for r, t in zip(raws, times) if r.zenith_deg is not None
-              and r.azimuth_deg is not None and r.clock_sun is not None]
+    lat, lon = float(options.latitude_deg), float(options.longitude_deg)
+    picked = [(r.zenith_deg, r.azimuth_deg, t) for r, t in zip(raws, times)
+              if r.zenith_deg is not None and r.azimuth_deg is not None
+              and r.clock_sun is not None]
     if len(picked) < CLOCK_NORTH_FRAMES:
         return None
     picked = picked[::max(1, len(picked) // CLOCK_SHIFT_FRAMES)]
-    best, best_kept = None, _clock_north([r for r, _ in picked]).kept
+
+    def kept(hours: int) -> int:
+        later = dt.timedelta(hours=hours)
+        pairs = [((z, a), ephemeris_sun(native, t + later, lat, lon)) for z, a, t in picked]
+        # Every measured Sun counts, whatever the clock's height: a shift
+        # that lifts a dusk clip's Suns into the north's 10-80 deg must not
+        # win by counting more of them.
+        return _kept(pairs, _north_of(pairs).turn or 0.0)
+    best, best_kept = None, kept(0)
     if best_kept >= CLOCK_SHIFT_NEEDLESS * len(picked):
         return None
     # The smallest shift first: of shifts that keep as many, it is kept.
     for hours in sorted(range(-CLOCK_SHIFT_MAX_HOURS, CLOCK_SHIFT_MAX_HOURS + 1), key=abs)[1:]:
-        later = dt.timedelta(hours=hours)
-        kept = _clock_north([replace(r, clock_sun=ephemeris_sun(native, t + later, lat, lon))
-                             for r, t in picked]).kept
-        if kept >= CLOCK_NORTH_SHARE * len(picked) and kept > best_kept:
-            best, best_kept = hours, kept
+        n = kept(hours)
+        if n >= CLOCK_SHIFT_SHARE * len(picked) and n > best_kept:
+            best, best_kept = hours, n
     return best
 
 
