@@ -136,10 +136,14 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # The measured Suns may say where north is (_clock_north); in a
     # clip the estimate does not explain (its Sun seldom measured, or its
     # model's shadows missing the footage's), a measured Sun the clock
-    # contradicts is set aside before any smoothing (_off_the_clock).
+    # contradicts is set aside before any smoothing (_off_the_clock). Where
+    # the Sun was measured on most frames and the clock keeps few of them in
+    # any north, the clock is as likely wrong as the model: the footage
+    # stands (rough9's true model given times an hour late: every Sun set
+    # aside and predicted 68 deg off).
     few_measured = calibration.clip_doubted(share)
-    unexplained = few_measured or model_off
     clock_north = _clock_north(raws)
+    unexplained = few_measured or (model_off and not clock_north.contradicted)
     # Times a whole number of hours off (a zone, daylight saving) can pass
     # for a north turn (an hour near noon is mostly azimuth): when shifted
     # times explain the measured Suns better, the clock's daytime rules are

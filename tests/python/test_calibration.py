@@ -509,7 +509,7 @@ def test_a_clip_whose_model_misses_the_footage_takes_the_ephemeris_where_the_clo
     clock = {f: (50.0 - f, 100.0 + 3.0 * f) for f in range(1, 11)}
     far = {3, 8}
 
-    def run(misfit):
+    def run(misfit, far=far):
         # The measured Suns are the ephemeris's with the north 90 deg off
         # (the scene's north offset left at 0), two of them 25 deg off.
         raws = [RawSun(f, clock[f][0] + (25.0 if f in far else 0.5),
@@ -536,6 +536,14 @@ def test_a_clip_whose_model_misses_the_footage_takes_the_ephemeris_where_the_clo
     track, by_frame = run(0.01)
     assert track.problem("prediction") is None
     assert not any(by_frame[f].predicted for f in clock)
+
+    # Every measured Sun 25 deg from the ephemeris, in any north: the clock
+    # (times an hour off?) is as likely wrong as the model, and the footage
+    # stands; the clock hint says they disagree.
+    track, by_frame = run(calibration.MODEL_MISFIT_MAX + 0.05, far=set(clock))
+    assert track.problem("prediction") is None
+    assert not any(by_frame[f].predicted for f in clock)
+    assert track.problem("clock").message.startswith("10 of 10 measured Suns are more than")
 
 
 def test_the_north_the_measured_suns_agree_on_needs_half_of_them_and_more_than_the_scenes():
