@@ -456,27 +456,26 @@ def _kept(measured: Sequence[SunPair], turn: float) -> int:
 # or a neighbouring zone's mistake. A clip of a few hours often fits an
 # hour's shift as well as its true times (another north takes it up: 24 of
 # the static 68 given their times kept every measured Sun at +-1 h), so a
-# shift is named only where it fits clearly better; and a Sun the estimate
-# got wrong can fit a shift of many hours (walls1: 96% kept at +7 h, 35% at
-# its true times).
+# shift is tried only where the times given keep fewer than
+# CLOCK_NORTH_SHARE of the measured Suns, and named where it keeps
+# CLOCK_SHIFT_SHARE of them. A rough model's Suns fit an hour's shift a
+# little better than their true times (rough9: 90% kept at -1 h, 86% at its
+# times); a Sun the estimate got wrong can fit a shift of many hours
+# (walls1: 96% kept at +7 h, 35% at its times).
 CLOCK_SHIFT_MAX_HOURS = 2
-# The share of the measured Suns a shift must keep to be named.
 CLOCK_SHIFT_SHARE = 0.75
 # Measured Suns the shifts are tried on at most, spread over the clip (the
 # ephemeris costs a native call a frame and a shift).
 CLOCK_SHIFT_FRAMES = 48
-# The times given keeping this share of them, no shift is tried (a shift of
-# an hour moves the Sun up to 15 deg: it keeps no more of them).
-CLOCK_SHIFT_NEEDLESS = 0.9
 
 
 def _clock_shift(native, raws: Sequence[RawSun], times, options: EstimateOptions) -> Optional[int]:
-    """The whole-hour shift of the capture times under which the ephemeris
-    keeps (in a north of their own or the scene's) at least
-    CLOCK_SHIFT_SHARE of the measured Suns, the most of them and more than
-    at the times given; None (no native core, no times or place, as in a
-    unit test, fewer than CLOCK_NORTH_FRAMES measured Suns, or no shift
-    does)."""
+    """Where the ephemeris at the times given keeps fewer than
+    CLOCK_NORTH_SHARE of the measured Suns (in a north of their own or the
+    scene's), the whole-hour shift of the times under which it keeps at
+    least CLOCK_SHIFT_SHARE of them, the most; None (no native core, no
+    times or place, as in a unit test, fewer than CLOCK_NORTH_FRAMES
+    measured Suns, or no shift does)."""
     if native is None or times is None or options.latitude_deg is None or \
             options.longitude_deg is None:
         return None
@@ -496,7 +495,7 @@ def _clock_shift(native, raws: Sequence[RawSun], times, options: EstimateOptions
         # win by counting more of them.
         return _kept(pairs, _north_of(pairs).turn or 0.0)
     best, best_kept = None, kept(0)
-    if best_kept >= CLOCK_SHIFT_NEEDLESS * len(picked):
+    if best_kept >= CLOCK_NORTH_SHARE * len(picked):
         return None
     # The smallest shift first: of shifts that keep as many, it is kept.
     for hours in sorted(range(-CLOCK_SHIFT_MAX_HOURS, CLOCK_SHIFT_MAX_HOURS + 1), key=abs)[1:]:

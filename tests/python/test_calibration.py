@@ -623,8 +623,10 @@ def test_a_clock_an_hour_off_is_named():
     native = pytest.importorskip("_native")
     Sunlight = trackfile.Sunlight
     lat, lon = 45.0, 5.0
-    times = [dt.datetime(2025, 6, 21, 6, tzinfo=dt.timezone.utc) + dt.timedelta(minutes=30 * k)
-             for k in range(16)]
+    # A whole June day, 05:00-18:30 UTC: no north turn takes up an hour's
+    # shift over it (the Sun's azimuth moves fastest at noon).
+    times = [dt.datetime(2025, 6, 21, 5, tzinfo=dt.timezone.utc) + dt.timedelta(minutes=30 * k)
+             for k in range(28)]
 
     def run(measured_at, misfit=0.01):
         raws = [RawSun(k + 1, *measured_at(k, t), confidence=0.9, sunlight=Sunlight.YES,
