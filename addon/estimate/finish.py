@@ -137,13 +137,15 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     # clip the estimate does not explain (its Sun seldom measured, or its
     # model's shadows missing the footage's), a measured Sun the clock
     # contradicts is set aside before any smoothing (_off_the_clock). Where
-    # the Sun was measured on most frames and the clock keeps few of them in
-    # any north, the clock is as likely wrong as the model: the footage
-    # stands (rough9's true model given times an hour late: every Sun set
-    # aside and predicted 68 deg off).
+    # the Sun was measured on most frames, the clock must first agree with
+    # most of them in the scene's own north: a clock that keeps few of them
+    # is as likely wrong as the model (rough9's true model given times an
+    # hour late: every Sun set aside and predicted 68 deg off), and a north
+    # turn may be taking up a clock an hour off (six rough members given
+    # such times went 0.6-2.3 -> 2.2-6.0 deg).
     few_measured = calibration.clip_doubted(share)
     clock_north = _clock_north(raws)
-    unexplained = few_measured or (model_off and not clock_north.contradicted)
+    unexplained = few_measured or (model_off and clock_north.confirms_scene_north)
     # Times a whole number of hours off (a zone, daylight saving) can pass
     # for a north turn (an hour near noon is mostly azimuth): when shifted
     # times explain the measured Suns better, the clock's daytime rules are
@@ -402,6 +404,13 @@ class ClockNorth:
         """Enough of them to tell, and most far from it whatever north."""
         return self.measured >= CLOCK_NORTH_FRAMES and \
             self.kept < CLOCK_NORTH_SHARE * self.measured
+
+    @property
+    def confirms_scene_north(self) -> bool:
+        """Enough of them to tell, most near it in the scene's north, and no
+        turn nearer."""
+        return self.measured >= CLOCK_NORTH_FRAMES and self.turn is None and \
+            not self.contradicted and self.times_off_hours is None
 
 
 # (measured Sun, the ephemeris's Sun at its time), each (zenith, azimuth).

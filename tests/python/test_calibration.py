@@ -500,20 +500,20 @@ def test_the_measured_suns_north_is_their_circular_median_on_a_long_clip_too():
 
 def test_a_clip_whose_model_misses_the_footage_takes_the_ephemeris_where_the_clock_says_so():
     """With capture times and a place, a clip measured on every frame whose
-    model's shadows miss the footage's (rough10 given its times: a path
-    through Suns 7 deg off on average, 13 at most) sets aside the measured
-    Suns far from the ephemeris and predicts them by it, in the north the
-    measured Suns agree on; the same clip with a model that fits keeps its
-    measured Suns."""
+    model's shadows miss the footage's (Marseille's sundial) sets aside the
+    measured Suns far from the ephemeris and predicts them by it where the
+    clock agrees with most of them in the scene's own north; the same clip
+    with a model that fits keeps its measured Suns, and so does one whose
+    Suns the clock meets only through a north turn (it may be taking up
+    times an hour off) or in no north at all."""
     Sunlight = trackfile.Sunlight
     clock = {f: (50.0 - f, 100.0 + 3.0 * f) for f in range(1, 11)}
     far = {3, 8}
 
-    def run(misfit, far=far):
-        # The measured Suns are the ephemeris's with the north 90 deg off
-        # (the scene's north offset left at 0), two of them 25 deg off.
+    def run(misfit, far=far, north_off=0.0):
+        # The measured Suns are the ephemeris's, two of them 25 deg off.
         raws = [RawSun(f, clock[f][0] + (25.0 if f in far else 0.5),
-                       clock[f][1] + 90.0, confidence=0.9, sunlight=Sunlight.YES,
+                       clock[f][1] + north_off, confidence=0.9, sunlight=Sunlight.YES,
                        tracked=_Tracked(misfit), clock_sun=clock[f]) for f in clock]
         track = trackfile.Track(method={"initial": "default", "tracking": "whole_clip",
                                         "smoothing": "two_pass"})
@@ -521,26 +521,31 @@ def test_a_clip_whose_model_misses_the_footage_takes_the_ephemeris_where_the_clo
                       [[r.frame for r in raws]])
         return track, {f.frame: f for f in track.frames}
 
-    track, by_frame = run(calibration.MODEL_MISFIT_MAX + 0.05)
+    doubted = calibration.MODEL_MISFIT_MAX + 0.05
+    track, by_frame = run(doubted)
     for f in far:
         est = by_frame[f]
         assert est.predicted and est.confidence == 0.0 and est.raw_zenith_deg is None
-        assert est.zenith_deg == clock[f][0]
-        assert est.azimuth_deg == pytest.approx(clock[f][1] + 90.0)
+        assert (est.zenith_deg, est.azimuth_deg) == clock[f]
     for f in set(clock) - far:
         assert not by_frame[f].predicted and by_frame[f].raw_zenith_deg is not None
     hint = track.problem("prediction")
     assert hint is not None and hint.message.startswith("the model's shadows miss the footage's")
-    assert "2 frame(s) (3, 8)" in hint.message and "north offset 90.0 deg" in hint.message
+    assert "2 frame(s) (3, 8)" in hint.message and "north offset 0.0 deg" in hint.message
 
     track, by_frame = run(0.01)
     assert track.problem("prediction") is None
     assert not any(by_frame[f].predicted for f in clock)
 
+    # The scene's north 90 deg off: a turn finds it, and the footage stands.
+    track, by_frame = run(doubted, north_off=90.0)
+    assert track.problem("prediction") is None and "+90.0 deg" in track.problem("clock").message
+    assert not any(by_frame[f].predicted for f in clock)
+
     # Every measured Sun 25 deg from the ephemeris, in any north: the clock
-    # (times an hour off?) is as likely wrong as the model, and the footage
-    # stands; the clock hint says they disagree.
-    track, by_frame = run(calibration.MODEL_MISFIT_MAX + 0.05, far=set(clock))
+    # is as likely wrong as the model, and the footage stands; the clock
+    # hint says they disagree.
+    track, by_frame = run(doubted, far=set(clock))
     assert track.problem("prediction") is None
     assert not any(by_frame[f].predicted for f in clock)
     assert track.problem("clock").message.startswith("10 of 10 measured Suns are more than")
