@@ -133,27 +133,9 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
     refined = bool((track.extra.get("model_refinement") or {}).get("used"))
     misfits = calibration.model_doubted(misfit)  # whatever the refinement
     model_off = calibration.model_doubted(misfit, refined)
-    # The measured Suns may say where north is (_clock_north); in a
-    # clip the estimate does not explain (its Sun seldom measured, or its
-    # model's shadows missing the footage's), a measured Sun the clock
-    # contradicts is set aside before any smoothing (_off_the_clock). Where
-    # the Sun was measured on most frames, the clock must first agree with
-    # most of them in the scene's own north: a clock that keeps few of them
-    # is as likely wrong as the model (rough9's true model given times an
-    # hour late: every Sun set aside and predicted 68 deg off), and a north
-    # turn may be taking up a clock an hour off (six rough members given
-    # such times went 0.6-2.3 -> 2.2-6.0 deg).
     few_measured = calibration.clip_doubted(share)
-    clock_north = _clock_north(raws)
-    unexplained = few_measured or (model_off and clock_north.confirms_scene_north)
-    # Times a whole number of hours off (a zone, daylight saving) can pass
-    # for a north turn (an hour near noon is mostly azimuth): when shifted
-    # times explain the measured Suns better, the clock's daytime rules are
-    # not used and the hint names the shift.
-    times_off = _clock_shift(native, raws, times, options)
-    if times_off is not None:
-        clock_north = ClockNorth(None, clock_north.measured, clock_north.kept, times_off)
-        unexplained = False
+    clock_north, unexplained = _clock_rules(native, raws, times, options, few_measured,
+                                            model_off)
     contradicted = 0
     if unexplained:
         raws, contradicted = _set_aside_off_the_clock(track, raws, clock_north.turn)
@@ -422,6 +404,30 @@ def _clock_pairs(raws: Sequence[RawSun]) -> List[SunPair]:
     return [((r.zenith_deg, r.azimuth_deg), r.clock_sun) for r in raws
             if r.zenith_deg is not None and r.azimuth_deg is not None
             and r.clock_sun is not None]
+
+
+def _clock_rules(native, raws: Sequence[RawSun], times, options: EstimateOptions,
+                 few_measured: bool, model_off: bool) -> Tuple[ClockNorth, bool]:
+    """How the measured Suns stand against the clock (ClockNorth: the north
+    they agree on, times that look hours off), and whether the clip is one
+    the estimate does not explain, whose measured Suns the clock contradicts
+    are set aside before any smoothing (_off_the_clock) and whose frames
+    without a measured Sun take the ephemeris's: one whose Sun was seldom
+    measured (`few_measured`), or whose model's shadows miss the footage's
+    (`model_off`) where the clock agrees with most of its measured Suns in
+    the scene's own north. A clock that keeps few of them is as likely wrong
+    as the model (rough9's true model given times an hour late: every Sun
+    set aside and predicted 68 deg off), and a north turn may be taking up a
+    clock an hour off (six rough members given such times went 0.6-2.3 ->
+    2.2-6.0 deg). Times a whole number of hours off can pass for a north
+    turn (an hour near noon is mostly azimuth): where shifted times explain
+    the measured Suns better (_clock_shift), the clock sets nothing aside
+    and the hint names the shift."""
+    clock_north = _clock_north(raws)
+    times_off = _clock_shift(native, raws, times, options)
+    if times_off is not None:
+        return ClockNorth(None, clock_north.measured, clock_north.kept, times_off), False
+    return clock_north, few_measured or (model_off and clock_north.confirms_scene_north)
 
 
 def _clock_north(raws: Sequence[RawSun]) -> ClockNorth:
