@@ -418,8 +418,8 @@ def _clock_rules(native, raws: Sequence[RawSun], times, options: EstimateOptions
     the scene's own north. A clock that keeps few of them is as likely wrong
     as the model (rough9's true model given times an hour late: every Sun
     set aside and predicted 68 deg off), and a north turn may be taking up a
-    clock an hour off (six rough members given such times went 0.6-2.3 ->
-    2.2-6.0 deg). Times a whole number of hours off can pass for a north
+    clock an hour off (seven rough-suite runs given such times went 0.3-2.3
+    -> 2.2-6.0 deg). Times a whole number of hours off can pass for a north
     turn (an hour near noon is mostly azimuth): where shifted times explain
     the measured Suns better (_clock_shift), the clock sets nothing aside
     and the hint names the shift."""
