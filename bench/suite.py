@@ -233,17 +233,15 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, unca
     if times or place:
         args += ["--times", times_csv(folder, os.path.join(out_dir, f"{name}.times.csv"),
                                       clock_off_hours)]
-    if place and smoothing != "physical":
-        where = trackfile.read_track(os.path.join(folder, "truth.sun.json")).extra["place"]
-        args += ["--latitude", str(round(where["latitude_deg"], 2)),
-                 "--longitude", str(round(where["longitude_deg"], 2))]
-    if smoothing == "physical":
+    if place or smoothing == "physical":
+        # The place as a user would type it (rounded).
         truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
-        d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
-        # Place and start as a user would type them (rounded), the rest fitted.
         args += ["--latitude", str(round(truth.extra["place"]["latitude_deg"], 2)),
-                 "--longitude", str(round(truth.extra["place"]["longitude_deg"], 2)),
-                 "--date", d0.date().isoformat(), "--start-time", d0.strftime("%H:%M"),
+                 "--longitude", str(round(truth.extra["place"]["longitude_deg"], 2))]
+    if smoothing == "physical":
+        # The start as a user would type it, the rest fitted.
+        d0, d1 = (dt.datetime.fromisoformat(t) for t in truth.extra["local_times"][:2])
+        args += ["--date", d0.date().isoformat(), "--start-time", d0.strftime("%H:%M"),
                  "--utc-offset", str(d0.utcoffset().total_seconds() / 3600),
                  "--frame-seconds", str((d1 - d0).total_seconds())]
     log = os.path.join(log_dir, f"estimate-{smoothing}-{name}.log")

@@ -457,14 +457,19 @@ def _north_of(pairs: Sequence[SunPair]) -> ClockNorth:
     return ClockNorth(None, len(measured), unturned)
 
 
-def _kept(measured: Sequence[SunPair], turn: float) -> int:
-    """How many of the (measured Sun, ephemeris's Sun) pairs are within
-    CLOCK_SLACK_DEG of each other, the ephemeris turned by `turn`."""
-    suns = angles.sun_in_world_from_angles(*np.array([sun for sun, _ in measured]).T)
-    zenith, azimuth = np.array([clock_sun for _, clock_sun in measured]).T
+def _clock_offsets_deg(pairs: Sequence[SunPair], turn: float) -> np.ndarray:
+    """How far (deg) each measured Sun of the (measured, ephemeris) pairs is
+    from the ephemeris's, turned by `turn`."""
+    suns = angles.sun_in_world_from_angles(*np.array([sun for sun, _ in pairs]).T)
+    zenith, azimuth = np.array([clock_sun for _, clock_sun in pairs]).T
     ephemeris = angles.sun_in_world_from_angles(zenith, azimuth + turn)
-    near = math.cos(math.radians(CLOCK_SLACK_DEG))
-    return int(np.count_nonzero(np.einsum("ij,ij->i", suns, ephemeris) >= near))
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", suns, ephemeris), -1.0, 1.0)))
+
+
+def _kept(pairs: Sequence[SunPair], turn: float) -> int:
+    """How many of the pairs the ephemeris, turned by `turn`, keeps within
+    CLOCK_SLACK_DEG."""
+    return int(np.count_nonzero(_clock_offsets_deg(pairs, turn) <= CLOCK_SLACK_DEG))
 
 
 # Whole hours the capture times may be off by, each way: a daylight-saving
@@ -518,15 +523,6 @@ def _clock_shift(native, raws: Sequence[RawSun], times, options: EstimateOptions
         if n >= CLOCK_SHIFT_SHARE * len(picked) and n > best_kept:
             best, best_kept = hours, n
     return best
-
-
-def _clock_off_deg(sun: Tuple[float, float], clock_sun: Tuple[float, float],
-                   north_turn: Optional[float]) -> float:
-    """How far (deg) a measured Sun (zenith, azimuth) is from the
-    ephemeris's, turned by north_turn."""
-    return angles.angle_between_deg(
-        angles.sun_in_world_from_angles(*sun),
-        angles.sun_in_world_from_angles(clock_sun[0], clock_sun[1] + (north_turn or 0.0)))
 
 
 def _set_aside_off_the_clock(track: trackfile.Track, raws: List[RawSun],
@@ -604,7 +600,8 @@ def _off_the_clock(r: RawSun, north_turn: Optional[float]) -> RawSun:
     if r.zenith_deg is None or r.azimuth_deg is None or r.clock_sun is None or \
             r.sunlight != Sunlight.YES:
         return r
-    off = _clock_off_deg((r.zenith_deg, r.azimuth_deg), r.clock_sun, north_turn)
+    off = float(_clock_offsets_deg([((r.zenith_deg, r.azimuth_deg), r.clock_sun)],
+                                   north_turn or 0.0)[0])
     if off <= CLOCK_SLACK_DEG:
         return r
     return replace(r, zenith_deg=None, azimuth_deg=None, tracked=None,
