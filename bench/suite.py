@@ -67,8 +67,10 @@ confidence calibration (frames with confidence >= 0.8 within 2 deg; frames
 more than 5 deg off at confidence >= 0.8), the time, and on frames with the
 Sun below the horizon how many the track flags without direct sunlight and
 the highest Sun it answers there (and the same for the overcast frames,
-with how far their predicted Sun is from the truth); then the reliability table (confidence in
-10 bins against the share of frames within 2 deg), its expected calibration
+with how far their predicted Sun is from the truth), and how many judged
+frames, in sunlight, it flags without (the AR lamp goes off there); then
+the reliability table (confidence in 10 bins against the share of frames
+within 2 deg), its expected calibration
 error and the frames more than 5 deg off at confidence >= 0.5; then the
 tracked frames' raw Suns by how far the shadows pin their height
 (sun_height_pinned_deg). Figures only: the
@@ -301,10 +303,12 @@ def score(key, folder, track_path, wall_s, error):
             continue
         if e is None or not e.has_estimate:
             per_frame.append({"frame": t.frame, "error_deg": None,
-                              "confidence": None if e is None else e.confidence})
+                              "confidence": None if e is None else e.confidence,
+                              "sunlight": e and e.sunlight and e.sunlight.value})
             continue
         row_frame = {"frame": t.frame, "confidence": e.confidence,
-                     "error_deg": round(off_deg(t, e.zenith_deg, e.azimuth_deg), 4)}
+                     "error_deg": round(off_deg(t, e.zenith_deg, e.azimuth_deg), 4),
+                     "sunlight": e.sunlight and e.sunlight.value}
         if e.sun_height_pinned_deg is not None and e.raw_zenith_deg is not None:
             row_frame["pinned_deg"] = e.sun_height_pinned_deg
             row_frame["raw_error_deg"] = round(off_deg(t, e.raw_zenith_deg, e.raw_azimuth_deg), 4)
@@ -414,6 +418,9 @@ def summary(rows):
         "over_5deg_at_half": sum(e > CONFIDENT_WRONG_DEG and c >= 0.5 for e, c in scored),
         "reliability": [dataclasses.asdict(b) for b in bins],
         "calibration_error": ece,
+        # Frames in sunlight said to have none: the AR lamp is keyed off there.
+        "sunlit_frames": len(frames),
+        "sunlit_flagged_no": sum(p.get("sunlight") == "no" for p in frames),
         "night_frames": len(night),
         "night_flagged": sum(p["sunlight"] == "no" for p in night),
         "night_max_altitude_deg": max((90.0 - p["zenith_deg"] for p in night
@@ -471,6 +478,8 @@ def print_summary(s, smoothing):
              f"without direct sunlight (target >= 98%), highest answered Sun "
              f"{_f(s['night_max_altitude_deg'], 0)} deg up (target <= 8)"
              if s["night_frames"] else "")
+          + (f"; in sunlight: {s['sunlit_flagged_no']}/{s['sunlit_frames']} frames flagged "
+             f"without direct sunlight (their lamp is off)" if s.get("sunlit_frames") else "")
           + (f"; overcast: {s['overcast_flagged']}/{s['overcast_frames']} frames flagged "
              f"without direct sunlight, their Sun {_f(s['overcast_error_mean_deg'], 0)} deg off "
              f"on average, {_f(s['overcast_error_max_deg'], 0)} at most"

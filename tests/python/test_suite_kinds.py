@@ -268,3 +268,25 @@ def test_the_score_judges_a_scene_by_both_rules(tmp_path):
     assert not low["passed"] and not low["passed_zenith_direction"]
     assert row_for(0.2, 0.2)["passed"]
     assert suite.summary([near_zenith, low])["passed_zenith_direction"] == 1
+
+
+def test_the_score_counts_judged_frames_said_to_be_without_sunlight(tmp_path):
+    """bench/suite.py: a frame where the Sun casts shadows (judged) that the
+    track flags without direct sunlight has its lamp keyed off; the summary
+    counts such frames, answered or not, and no other."""
+    trackfile = suite.trackfile
+    Sunlight = trackfile.Sunlight
+    zeniths = [40.0, 45.0, 50.0, 88.0]
+    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=z,
+                                                            azimuth_deg=120.0)
+                                    for i, z in enumerate(zeniths)])
+    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+    flags = [Sunlight.YES, Sunlight.NO, Sunlight.UNKNOWN, Sunlight.NO]
+    estimate = trackfile.Track(frames=[trackfile.FrameEstimate(
+        frame=i + 1, zenith_deg=z, azimuth_deg=120.0, confidence=0.9, sunlight=s)
+        for i, (z, s) in enumerate(zip(zeniths, flags))])
+    trackfile.write_track(str(tmp_path / "est.sun.json"), estimate)
+    row = suite.score("x", str(tmp_path), str(tmp_path / "est.sun.json"), 1.0, None)
+    s = suite.summary([row])
+    # Frame 4 (2 deg up) is not judged: its "no" is not counted.
+    assert (s["sunlit_frames"], s["sunlit_flagged_no"]) == (3, 1)
