@@ -38,7 +38,7 @@ from __future__ import annotations
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Set, Tuple, Union
 
 import numpy as np
 
@@ -172,6 +172,14 @@ SUNLIT_MIN_CONTRAST = 1.3
 # from its segment's circle is not in sunlight (the January dial's last
 # capture, in shade, fits 1.11 with a Sun 9 deg off its circle).
 SUNLIT_HAZY_CONTRAST = 1.0
+# A frame the tracker could not confirm, on which the path's Sun casts no
+# shadow of the model on the ground in view (TrackedFrameStatus
+# no_shadow_in_view: shadows on walls alone, a high Sun's hidden under its
+# casters), cannot show sunlight on the ground: it is UNKNOWN, not NO, and
+# counts as one whose shadows are out of view. Suite member walls3's facade
+# frames in sunlight were NO, their lamp keyed off.
+NO_SHADOW_IN_VIEW = ("the Sun's path casts no shadow of the model on the ground in view on "
+                     "this frame: it cannot show whether the Sun shines")
 # A frame with evidence of its own that the tracker could not confirm (a
 # ground the tracker cannot use: a bollard named as the ground left 8 of the
 # plaza's 32 sunny frames unconfirmed) is in sunlight while its best
@@ -793,6 +801,9 @@ class _WholeClip:
         self.before, self.after = [0] * self.n, [0] * self.n  # nearest measured frames
         self.tracker_run: Optional[Tuple[int, int]] = None  # (segment, direction) followed
         self.tracker_last: Optional[int] = None             # the tracker's last frame
+        # Frames on which the path's Sun casts no shadow of the model on the
+        # ground in view (the tracker's word): they cannot show sunlight.
+        self.no_shadow_in_view: Set[int] = set()
         for s in range(len(self.bounds) - 1):
             lo, hi = self.bounds[s], self.bounds[s + 1]
             self.result.segments.append(frames[lo:hi])
@@ -876,6 +887,11 @@ class _WholeClip:
             r.shadows_in_view = sunlit or not self.out_of_view[k]
             if not sunlit and self.out_of_view[k]:
                 r.reason = SHADOWS_OUT_OF_VIEW
+            elif not sunlit and k in self.no_shadow_in_view:
+                # Shadows on walls alone, or a high Sun's hidden under their
+                # casters: the ground in view shows none whatever the light.
+                r.sunlight, r.shadows_in_view, r.reason = \
+                    Sunlight.UNKNOWN, False, NO_SHADOW_IN_VIEW
         night = set(self.night_by_the_clock(tracked))
         for k in night:
             frames[k].sunlight = Sunlight.NO
@@ -1069,6 +1085,8 @@ class _WholeClip:
             self.tracker_last = k
             if r.ok and angles.angle_between_deg(r.sun_in_world, d) <= limit:
                 return r
+            if attempt == "path" and r.status == self.native.TrackedFrameStatus.no_shadow_in_view:
+                self.no_shadow_in_view.add(k)
         return None
 
     def restart(self, run: Tuple[int, int], first: int) -> bool:

@@ -295,8 +295,19 @@ void BindEstimate(py::module_& m) {
       "ThesisTracker(scene, camera, ground_object_ids, options=None, "
       "**fields of ThesisTrackerOptions).");
   BindTrackerMethods<ThesisTracker>(thesis_tracker);
+  py::enum_<TrackedFrame::Status>(m, "TrackedFrameStatus",
+                                  "What became of a tracked frame.")
+      .value("tracked", TrackedFrame::Status::kTracked)
+      .value("unusable_frame", TrackedFrame::Status::kUnusableFrame)
+      .value("no_ground_in_view", TrackedFrame::Status::kNoGroundInView)
+      .value("no_shadow_in_view", TrackedFrame::Status::kNoShadowInView)
+      .value("band_out_of_view", TrackedFrame::Status::kBandOutOfView)
+      .value("band_on_ground_only", TrackedFrame::Status::kBandOnGroundOnly)
+      .value("no_match", TrackedFrame::Status::kNoMatch)
+      .value("no_contrast", TrackedFrame::Status::kNoContrast);
   py::class_<TrackedFrame>(m, "TrackedFrame")
       .def_readonly("ok", &TrackedFrame::ok)
+      .def_readonly("status", &TrackedFrame::status)
       .def_readonly("reason", &TrackedFrame::reason)
       .def_readonly("zenith_deg", &TrackedFrame::zenith_deg)
       .def_readonly("azimuth_deg", &TrackedFrame::azimuth_deg)

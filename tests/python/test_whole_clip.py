@@ -892,3 +892,53 @@ def test_a_short_leg_after_a_long_one_does_not_make_the_leg_between_an_excursion
     for k, r in enumerate(result.frames):
         assert r.sun_in_world is not None, (k, r.reason)
         assert error_deg(r.sun_in_world, truth[k]) < 1.0, k
+
+
+def test_a_frame_whose_suns_shadows_miss_the_ground_in_view_is_not_said_to_be_unlit():
+    """Suite member walls3: the buildings' shadows fall on the facades, and
+    on 15 sunlit frames the tracker, asked at the path's Sun, found no
+    shadow of the model on the ground in view. They were said to be
+    without direct sunlight and the lamp was keyed off; the ground cannot
+    show it either way, so they are UNKNOWN, and do not count as frames
+    that could show the Sun. A frame whose ground could show shadows and
+    shows none stays NO."""
+    up = np.array([0.3, 0.4, 0.866])
+    n = 6
+    clip = object.__new__(whole_clip._WholeClip)
+    clip.frames = list(range(1, n + 1))
+    clip.n = n
+    clip.starts = [0] * n
+    clip.bounds = [0, n]
+    clip.usable = [True] * n
+    clip.out_of_view = [False] * n
+    clip.clock_elevation = None
+    clip.clock_trusted = None
+    clip.no_shadow_in_view = {2, 3}
+    tracked = types.SimpleNamespace(contrast=2.0)
+    frames = [whole_clip.RawFrame(f, sun_in_world=up.copy(), confidence=0.9, measured=True,
+                                  refined=True, tracked=tracked) for f in clip.frames]
+    for k in (2, 3, 4):  # not confirmed; their evidence leads no one Sun
+        frames[k] = whole_clip.RawFrame(k + 1, sun_in_world=up.copy(), confidence=0.1)
+    clip.result = whole_clip.WholeClipResult(frames=frames, anchor=1)
+    clip.path = types.SimpleNamespace(explained=[0.25, 0.26, 0.05, 0.05, 0.05, 0.25],
+                                      margin=[25.0, 25.0, -12.0, 0.0, -25.0, 25.0])
+    clip.decide_sunlight()
+    Sunlight = whole_clip.Sunlight
+    got = clip.result.frames
+    assert [r.sunlight for r in got] == [Sunlight.YES, Sunlight.YES, Sunlight.UNKNOWN,
+                                         Sunlight.UNKNOWN, Sunlight.NO, Sunlight.YES]
+    assert [r.shadows_in_view for r in got] == [True, True, False, False, True, True]
+    assert got[2].reason == whole_clip.NO_SHADOW_IN_VIEW
+    assert got[2].sun_in_world is None and got[2].confidence == 0.0
+
+
+def test_a_tracked_frame_says_what_became_of_it_as_a_status(world):
+    """The tracker's outcome is a status the estimate reads (decide_sunlight
+    reads no_shadow_in_view), not its reason's words."""
+    scene, camera = world[0], world[1]
+    tracker = native.ShadowTracker(scene, camera, [0])
+    d = sun(40, 120)
+    first = tracker.initialize(draw(world, d), d)
+    assert first.ok and first.status == native.TrackedFrameStatus.tracked, first.reason
+    black = tracker.track(np.zeros((H, W), np.float32))
+    assert not black.ok and black.status == native.TrackedFrameStatus.unusable_frame

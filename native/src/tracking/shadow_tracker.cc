@@ -879,6 +879,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   s.surfaces_started = false;
   s.Describe(d, &out);
   if (s.ground.empty()) {
+    out.status = TrackedFrame::Status::kNoGroundInView;
     out.reason = "no ground in view: check the ground objects and the camera";
     return out;
   }
@@ -904,6 +905,7 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
     if (s.o.all_surfaces) faces_seen.push_back(s.face[all[i]]);
   }
   if (seen == 0 || seen < all.size() * kMinSeenShare) {
+    out.status = TrackedFrame::Status::kNoGroundInView;
     out.reason = "the ground is out of view on this frame";
     return out;
   }
@@ -939,6 +941,8 @@ TrackedFrame ShadowTracker::Initialize(const cv::Mat& frame,
   out.band_pixels = static_cast<int>(s.band.size());
   out.ok = !s.band.empty();
   out.confidence = out.ok ? 1.0 : 0.0;
+  out.status = out.ok ? TrackedFrame::Status::kTracked
+                      : TrackedFrame::Status::kNoShadowInView;
   if (!out.ok)
     out.reason = "no cast shadow of the model falls on the ground in view";
   out.seconds =
@@ -989,6 +993,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   out.reason = s.Unusable(frame);
   if (!out.reason.empty()) {
     ++s.lost;
+    out.status = TrackedFrame::Status::kUnusableFrame;
     return finish(pred);
   }
   const Eigen::Vector3f pf = pred.cast<float>();
@@ -1021,6 +1026,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   }
   if (band.empty()) {
     ++s.lost;
+    out.status = TrackedFrame::Status::kNoShadowInView;
     out.reason = "no cast shadow of the model falls on the ground in view";
     return finish(pred);
   }
@@ -1030,6 +1036,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   // A moving camera's frame may not see the band (view_warp.h).
   if (s.band_y.empty() || s.band_y.size() < s.band_picked * kMinSeenShare) {
     ++s.lost;
+    out.status = TrackedFrame::Status::kBandOutOfView;
     out.reason = "the shadows' band is out of view on this frame";
     return finish(pred);
   }
@@ -1038,6 +1045,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
   // it moved the low Sun's frames by up to 2 deg, and their smoothed Sun
   // 0.1 deg further off.
   if (s.o.all_surfaces && s.OffGroundShare() < kMinOffGroundShare) {
+    out.status = TrackedFrame::Status::kBandOnGroundOnly;
     out.reason = "the shadows' band lies on the ground alone";
     return finish(pred);
   }
@@ -1057,6 +1065,7 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
       s.Search(pred, step, scale, &escaped);  // leaves its fit in s.fit
   if (escaped) {
     ++s.lost;
+    out.status = TrackedFrame::Status::kNoMatch;
     out.reason = "shadow lost: no match within " +
                  std::to_string(static_cast<int>(std::lround(
                      kMaxWalkSteps * std::max(step, s.o.search_step_deg)))) +
@@ -1071,12 +1080,14 @@ TrackedFrame ShadowTracker::TrackImpl(const cv::Mat& frame,
       s.band_y.empty() ? 0.0 : double(inliers) / s.band_y.size();
   if (out.contrast < s.o.min_contrast) {
     ++s.lost;
+    out.status = TrackedFrame::Status::kNoContrast;
     out.reason =
         "shadow lost: no sun/shade contrast on the ground (cloud, haze or "
         "glare?)";
     return finish(pred);
   }
   out.ok = true;
+  out.status = TrackedFrame::Status::kTracked;
   out.confidence =
       inlier_fraction * std::min(1.0, out.contrast / (3 * s.o.min_contrast));
   out.misfit = s.Misfit(frame, found);

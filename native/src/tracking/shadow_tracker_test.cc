@@ -275,6 +275,7 @@ TEST(ShadowTracker, UndecodableAndFlatFramesAreReportedNotGuessed) {
       Sun(40, 130));
   TrackedFrame r = tracker.Track(cv::Mat());
   EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.status, TrackedFrame::Status::kUnusableFrame);
   EXPECT_EQ(r.reason, "frame cannot be decoded");
   // Overcast: no direct Sun, the ground shows only its texture.
   testing::RenderOptions overcast = Textured(3);
@@ -283,7 +284,35 @@ TEST(ShadowTracker, UndecodableAndFlatFramesAreReportedNotGuessed) {
   r = tracker.Track(
       testing::RenderLambertian(fx.scene, fx.cam, Sun(40, 131), overcast));
   EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.status, TrackedFrame::Status::kNoContrast);
   EXPECT_NE(r.reason.find("shadow lost"), std::string::npos);
+}
+
+// A frame asked about a Sun whose shadows fall nowhere on the ground in view
+// (a view of open ground away from the casters) is not a frame
+// without sunlight: it cannot show the Sun's shadows, and says so by its
+// status, which the whole-clip estimate reads (whole_clip.decide_sunlight).
+TEST(ShadowTracker, ASunWhoseShadowsMissTheViewIsTold) {
+  Fixture fx;
+  // The camera looks south-east, away from the casters, whose shadows fall
+  // to the north-west behind it.
+  const Camera away = testing::LookAt({6, -6, 2}, {9, -9, 0}, 320, 240);
+  ShadowTracker tracker(fx.scene, away, fx.Options());
+  const Eigen::Vector3d sun = Sun(40, 130);
+  const cv::Mat frame =
+      testing::RenderLambertian(fx.scene, away, sun, Textured(1));
+  const TrackedFrame first = tracker.Initialize(frame, sun);
+  EXPECT_FALSE(first.ok);
+  EXPECT_EQ(first.status, TrackedFrame::Status::kNoShadowInView);
+  const TrackedFrame next = tracker.Track(frame, sun);
+  EXPECT_FALSE(next.ok);
+  EXPECT_EQ(next.status, TrackedFrame::Status::kNoShadowInView);
+  // In view of the casters the same Sun is tracked.
+  ShadowTracker near(fx.scene, fx.cam, fx.Options());
+  const TrackedFrame seen = near.Initialize(
+      testing::RenderLambertian(fx.scene, fx.cam, sun, Textured(1)), sun);
+  EXPECT_TRUE(seen.ok) << seen.reason;
+  EXPECT_EQ(seen.status, TrackedFrame::Status::kTracked);
 }
 
 // The misfit tells a model whose casters are not where the footage's are

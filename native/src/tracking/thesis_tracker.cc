@@ -274,6 +274,7 @@ TrackedFrame ThesisTracker::Initialize(const cv::Mat& frame,
   const int pick =
       SelectShadow(t.candidates, t.o.max_direction_error_deg, &dropped);
   if (pick < 0) {
+    out.status = TrackedFrame::Status::kNoShadowInView;
     out.reason = "no ground shadow passes the five criteria";
     return out;
   }
@@ -285,6 +286,7 @@ TrackedFrame ThesisTracker::Initialize(const cv::Mat& frame,
   t.prev_energy = e;
   t.ready = true;
   out.ok = true;
+  out.status = TrackedFrame::Status::kTracked;
   out.confidence = 1.0;
   out.shadow_start_px = sc.start_px;
   out.shadow_end_px = sc.end_px;
@@ -308,10 +310,12 @@ TrackedFrame ThesisTracker::Track(const cv::Mat& frame) {
     return out;
   };
   if (!t.ready) {
+    out.status = TrackedFrame::Status::kNoShadowInView;
     out.reason = "no shadow was selected on the first frame";
     return finish();
   }
   if (frame.empty()) {
+    out.status = TrackedFrame::Status::kUnusableFrame;
     out.reason = "frame cannot be decoded";
     return finish();
   }
@@ -340,6 +344,7 @@ TrackedFrame ThesisTracker::Track(const cv::Mat& frame) {
   out.shadow_start_px = t.s;
   out.shadow_end_px = f;
   if (length < 2) {
+    out.status = TrackedFrame::Status::kNoMatch;
     out.reason = "shadow lost: the walk found no shadow pixels";
     return finish();
   }
@@ -348,6 +353,7 @@ TrackedFrame ThesisTracker::Track(const cv::Mat& frame) {
   t.azimuth = WrapDeg(t.azimuth - std::remainder(theta - t.theta_prev, 360.0));
   t.theta_prev = theta;
   out.ok = true;
+  out.status = TrackedFrame::Status::kTracked;
   out.confidence = 1.0;  // the thesis gives none
   out.zenith_deg = t.zenith;
   out.azimuth_deg = t.azimuth;

@@ -70,9 +70,22 @@ struct ShadowTrackerOptions {
 };
 
 struct TrackedFrame {
-  // False: no estimate on this frame (reason says why); the angles then hold
-  // the prediction the tracker keeps following.
+  // What became of the frame; reason says it in words for the user.
+  enum class Status {
+    kTracked,
+    kUnusableFrame,     // not decodable, another size, black or overexposed
+    kNoGroundInView,    // the ground is not in view (on this frame)
+    kNoShadowInView,    // the model casts no shadow on the ground in view
+                        // under the Sun asked about: the frame cannot show it
+    kBandOutOfView,     // a moving camera's frame misses the shadows' band
+    kBandOnGroundOnly,  // (every surface) the band lies on the ground alone
+    kNoMatch,           // no fit near the predicted Sun
+    kNoContrast,        // the shadows' edges show no sun/shade step
+  };
+  // False: no estimate on this frame (status and reason say why); the angles
+  // then hold the prediction the tracker keeps following.
   bool ok = false;
+  Status status = Status::kNoMatch;
   std::string reason;
   double zenith_deg = 0.0;  // world frame, azimuth clockwise from +Y
   double azimuth_deg = 0.0;
