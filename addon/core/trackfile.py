@@ -29,8 +29,9 @@ class Sunlight(str, Enum):
     """Whether direct sunlight reaches the scene on a frame, as its footage
     shows: YES (shadows the Sun casts), NO (none where the Sun's shadows
     would show, or the Sun below the horizon: night, twilight, cloud, the
-    scene in shade), UNKNOWN (the frame cannot tell: not readable, or no
-    frame of its segment shows shadows)."""
+    scene in shade), UNKNOWN (the frame cannot tell: not readable, no
+    frame of its segment shows shadows, or the model casts no shadow on the
+    ground in view under the path's Sun)."""
     YES = "yes"
     NO = "no"
     UNKNOWN = "unknown"
