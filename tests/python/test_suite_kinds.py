@@ -197,6 +197,15 @@ def test_moving_members_from_25_on_pan_away_from_the_casters_and_back():
     assert "away" not in random_scene.draw("moving24", SP)["camera_motion"]
 
 
+def write_truth(tmp_path, zeniths, azimuth_deg=120.0):
+    """A scene folder's truth.sun.json: frames 1.. at these zeniths."""
+    trackfile = suite.trackfile
+    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=z,
+                                                            azimuth_deg=azimuth_deg)
+                                    for i, z in enumerate(zeniths)])
+    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+
+
 def test_the_score_reports_a_zenith_bias_that_no_error_magnitude_shows(tmp_path):
     """bench/suite.py: a track whose Sun is 0.5 deg too low on every judged
     frame (and 0.3 too high on one) has that signed mean in its row, and the
@@ -204,10 +213,7 @@ def test_the_score_reports_a_zenith_bias_that_no_error_magnitude_shows(tmp_path)
     judged."""
     trackfile = suite.trackfile
     zeniths = [40.0, 50.0, 60.0, 88.0]
-    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=z,
-                                                            azimuth_deg=120.0)
-                                    for i, z in enumerate(zeniths)])
-    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+    write_truth(tmp_path, zeniths)
     offsets = [0.5, 0.5, -0.3, 5.0]
     estimate = trackfile.Track(frames=[trackfile.FrameEstimate(
         frame=i + 1, zenith_deg=z + o, azimuth_deg=120.0, confidence=0.9)
@@ -277,10 +283,7 @@ def test_the_score_counts_judged_frames_said_to_be_without_sunlight(tmp_path):
     trackfile = suite.trackfile
     Sunlight = trackfile.Sunlight
     zeniths = [40.0, 45.0, 50.0, 88.0]
-    truth = trackfile.Track(frames=[trackfile.FrameEstimate(frame=i + 1, zenith_deg=z,
-                                                            azimuth_deg=120.0)
-                                    for i, z in enumerate(zeniths)])
-    trackfile.write_track(str(tmp_path / "truth.sun.json"), truth)
+    write_truth(tmp_path, zeniths)
     flags = [Sunlight.YES, Sunlight.NO, Sunlight.UNKNOWN, Sunlight.NO]
     estimate = trackfile.Track(frames=[trackfile.FrameEstimate(
         frame=i + 1, zenith_deg=z, azimuth_deg=120.0, confidence=0.9, sunlight=s)
