@@ -178,6 +178,10 @@ SUNLIT_HAZY_CONTRAST = 1.0
 # casters), cannot show sunlight on the ground: it is UNKNOWN, not NO, and
 # counts as one whose shadows are out of view. Suite member walls3's facade
 # frames in sunlight were NO, their lamp keyed off.
+# A frame whose Sun is the path's direction, which the tracker could not
+# refine: good to the sky grid's cell.
+PATH_CELL_ONLY = ("the tracker could not refine this frame's Sun: it is the whole-clip path's "
+                  "direction, good to a degree or two")
 NO_SHADOW_IN_VIEW = ("the Sun's path casts no shadow of the model on the ground in view on "
                      "this frame: it cannot show whether the Sun shines")
 # A frame with evidence of its own that the tracker could not confirm (a
@@ -1056,6 +1060,9 @@ class _WholeClip:
         else:
             raw.sun_in_world = np.asarray(d, dtype=float)
             raw.confidence = (0.5 * support) if measured else CARRIED_CONFIDENCE
+            # Its Sun is the path's grid cell (a degree or two wide), not
+            # the evidence-less frame the reason first said.
+            raw.reason = PATH_CELL_ONLY
         return refined is not None
 
     def passed_track(self, k: int, d, limit: float, beyond: bool):

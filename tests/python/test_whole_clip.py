@@ -942,3 +942,23 @@ def test_a_tracked_frame_says_what_became_of_it_as_a_status(world):
     assert first.ok and first.status == native.TrackedFrameStatus.tracked, first.reason
     black = tracker.track(np.zeros((H, W), np.float32))
     assert not black.ok and black.status == native.TrackedFrameStatus.unusable_frame
+
+
+def test_a_sun_the_tracker_could_not_refine_says_so():
+    """A measured frame whose Sun stays the path's grid cell (the tracker
+    could not refine it) is in sunlight with a coarse Sun; its reason said
+    "no shadow evidence on this frame", which it has (suite member walls3,
+    frame 15, at confidence 0.94)."""
+    clip = object.__new__(whole_clip._WholeClip)
+    clip.n, clip.checked = 3, 0
+    clip.tick = lambda x: None
+    clip.directions = np.array([[0.0, 0.5, 0.866]])
+    clip.refine_max_deg = 8.0
+    clip.path = types.SimpleNamespace(direction=[0, 0, 0], path_margin=[25.0] * 3,
+                                      measured=[True] * 3)
+    clip.passed_track = lambda k, d, limit, beyond: None
+    clip.restart = lambda run, first: False
+    raw = whole_clip.RawFrame(2, reason="no shadow evidence on this frame or around it")
+    assert not clip.refine(1, raw, (0, 1), 0, False, 1, 1)
+    assert raw.sun_in_world is not None and raw.confidence > 0
+    assert raw.reason == whole_clip.PATH_CELL_ONLY
