@@ -531,6 +531,11 @@ class _WholeClip:
                     self.starts[k] = 1
         # The caller's starts; self.starts also gets the loops found (run()).
         self.known_starts = list(self.starts)
+        # Frames on which the path's Sun casts no shadow of the model on the
+        # ground in view (the tracker's word): they cannot show sunlight.
+        # Kept over both checks: the path solved again without the dark
+        # frames' evidence is checked without asking the tracker everywhere.
+        self.no_shadow_in_view: Set[int] = set()
         # A refined Sun further than steer_deg from the path's direction is
         # not believed (the tracker locked onto something else): the pass's
         # own steering limit, also the check's.
@@ -805,9 +810,6 @@ class _WholeClip:
         self.before, self.after = [0] * self.n, [0] * self.n  # nearest measured frames
         self.tracker_run: Optional[Tuple[int, int]] = None  # (segment, direction) followed
         self.tracker_last: Optional[int] = None             # the tracker's last frame
-        # Frames on which the path's Sun casts no shadow of the model on the
-        # ground in view (the tracker's word): they cannot show sunlight.
-        self.no_shadow_in_view: Set[int] = set()
         for s in range(len(self.bounds) - 1):
             lo, hi = self.bounds[s], self.bounds[s + 1]
             self.result.segments.append(frames[lo:hi])
