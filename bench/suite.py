@@ -262,6 +262,12 @@ def estimate(key, folder, method, smoothing, out_dir, log_dir, times=False, unca
     return track, wall, error
 
 
+def _sunlight(e):
+    """A track frame's sunlight flag as written ("yes", "no", "unknown"), or
+    None (no frame, or not decided)."""
+    return e.sunlight.value if e is not None and e.sunlight is not None else None
+
+
 def score(key, folder, track_path, wall_s, error):
     """Per-scene figures (a dict, JSON-able)."""
     truth = trackfile.read_track(os.path.join(folder, "truth.sun.json"))
@@ -295,7 +301,7 @@ def score(key, folder, track_path, wall_s, error):
             off = None
             if e is not None and e.has_estimate:
                 off = round(off_deg(t, e.zenith_deg, e.azimuth_deg), 3)
-            night.append({"frame": t.frame, "sunlight": e and e.sunlight and e.sunlight.value,
+            night.append({"frame": t.frame, "sunlight": _sunlight(e),
                           "zenith_deg": e and e.zenith_deg, "true_zenith_deg": t.zenith_deg,
                           "why": "night" if t.zenith_deg > 90.0 else "overcast",
                           "error_deg": off, "confidence": e and e.confidence})
@@ -304,11 +310,11 @@ def score(key, folder, track_path, wall_s, error):
         if e is None or not e.has_estimate:
             per_frame.append({"frame": t.frame, "error_deg": None,
                               "confidence": None if e is None else e.confidence,
-                              "sunlight": e and e.sunlight and e.sunlight.value})
+                              "sunlight": _sunlight(e)})
             continue
         row_frame = {"frame": t.frame, "confidence": e.confidence,
                      "error_deg": round(off_deg(t, e.zenith_deg, e.azimuth_deg), 4),
-                     "sunlight": e.sunlight and e.sunlight.value}
+                     "sunlight": _sunlight(e)}
         if e.sun_height_pinned_deg is not None and e.raw_zenith_deg is not None:
             row_frame["pinned_deg"] = e.sun_height_pinned_deg
             row_frame["raw_error_deg"] = round(off_deg(t, e.raw_zenith_deg, e.raw_azimuth_deg), 4)
