@@ -242,14 +242,15 @@ def smooth_angles(frames, zenith, azimuth, weights, mode, degree=1, times_s=None
 LOCAL_FIT_CHUNK = 1024
 
 
-def _local_fits(t, order, lo, hi, windows, weights, values):
+def _local_fits(t, order, lo, hi, windows, weights, values, max_degree=2):
     """Each frame's local polynomial fit (two_pass_local_directions) of
     `values` ((n, 3)) over its neighbours order[lo[i]:hi[i]] (sorted by
     time), weighted by the tricube kernel over windows[i] and `weights`, at
     the frame itself: (n, 3), NaN rows where no neighbour has weight. A
     quadratic where the frame has at least 6 weighted neighbours and 3 on
     each side; at a segment's ends it would swing on the last few values,
-    so a line there (at least 3); never more terms than distinct times.
+    so a line there (at least 3); never more terms than distinct times, nor
+    than max_degree allows.
     Solved from the kernel-weighted moments, all frames at once (a least
     squares call per frame was most of the smoothing's time)."""
     n = len(t)
@@ -273,7 +274,7 @@ def _local_fits(t, order, lo, hi, windows, weights, values):
         distinct = (sel & (d > before)).sum(axis=1)
         sides = np.minimum((sel & (d < 0)).sum(axis=1), (sel & (d > 0)).sum(axis=1))
         degree = np.minimum(np.where((m >= 6) & (sides >= 3), 2, np.where(m >= 3, 1, 0)),
-                            distinct - 1)
+                            np.minimum(distinct - 1, max_degree))
         dk = np.where(sel, d, 0.0)
         powers = [kern * dk ** k for k in range(5)]
         moments = np.stack([p.sum(axis=1) for p in powers], axis=1)
@@ -293,6 +294,44 @@ def _local_fits(t, order, lo, hi, windows, weights, values):
     return out
 
 
+# The finest height spread a frame's Sun can have (deg; the tracker's
+# elevation_pinned_deg steps): a frame's weight in the height's correction
+# is (this / its spread) squared, an inverse variance.
+FINEST_HEIGHT_SPREAD_DEG = 0.5
+# The pinned Suns' own scatter in height (deg): the best-pinned raw Suns are
+# within 2 deg of the truth 97% of the time on the static suite. The
+# height's correction c is shrunk to c * c^2 / (c^2 + this^2): one pinned
+# frame 1.65 deg off moved five well-fitted frames of walls23 by 1.5 deg
+# unshrunk, where urban15's unpinned frames were 4-10 deg too low.
+HEIGHT_SCATTER_DEG = 2.0
+
+
+def _heights_pinned(t, z, w, robust, good, height_spread_deg, zen, windows):
+    """two_pass_local_directions' zeniths corrected toward the frames whose
+    shadows pin the height best: each frame's correction is the kernel-
+    weighted mean, over its neighbours, of raw minus fitted zenith, each
+    frame weighted by the inverse square of its height's spread. A mean,
+    not a line: one pinned frame among many unpinned ones sets the level,
+    and a slope from the unpinned ones' scatter would swing at a segment's
+    ends. The direction's fit already follows the Sun's motion (and the
+    prior); among frames alike the correction is none, and within the
+    pinned Suns' own scatter it is shrunk (HEIGHT_SCATTER_DEG). The
+    direction's robust weights stay: a pinned Sun the direction's fit
+    rejected steers no height either."""
+    spread = np.array([np.nan if v is None else float(v) for v in height_spread_deg])
+    spread = np.where(np.isfinite(spread), np.maximum(spread, FINEST_HEIGHT_SPREAD_DEG), 90.0)
+    if np.ptp(spread[good]) == 0:
+        return zen
+    order, lo, hi, win = windows
+    residual = np.zeros((len(t), 3))
+    residual[good, 0] = z[good] - zen[good]
+    hw = (FINEST_HEIGHT_SPREAD_DEG / spread) ** 2
+    correction = np.nan_to_num(_local_fits(t, order, lo, hi, win, w * robust * hw, residual,
+                                           max_degree=0)[:, 0])
+    correction = correction ** 3 / (correction ** 2 + HEIGHT_SCATTER_DEG ** 2)
+    return np.clip(zen + correction, 0.0, 180.0)
+
+
 def _tricube(d):
     """The local fits' tricube kernel at offsets d, in half windows (the
     callers take only the frames within the window, |d| < 1)."""
@@ -309,7 +348,8 @@ WINDOW_GROWTH = 1.25
 
 
 def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window=None,
-                              iterations=4, prior_zenith=None, prior_azimuth=None):
+                              iterations=4, prior_zenith=None, prior_azimuth=None,
+                              height_spread_deg=None):
     """Two-pass smoothing of the Sun's direction by local quadratics: at
     every frame, the unit vector's components are fitted over its neighbours
     in time (tricube kernel, the weights, robust bisquare weights on the
@@ -334,7 +374,14 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
     azimuth at sunset); offsets from the circle stay nearly constant, so
     the wider fit no longer extrapolates the path's curve. A run of doubted
     frames (suite scene 23: five at confidence 0.07-0.18, 5-7 deg off)
-    otherwise steers a fixed window's fit of its own."""
+    otherwise steers a fixed window's fit of its own.
+
+    `height_spread_deg` (one per frame): how far each frame's Sun could
+    move in height unnoticed (a tracked Sun whose shadows' tips are out of
+    view: any lower Sun fits them alike, 90; None: not measured, as 90). The
+    azimuths count as any frame's, and the height is corrected toward the
+    frames that pin it best (_heights_pinned).
+    """
     t, z, w = _arrays(frames, zenith, weights)
     _, a, w_a = _arrays(frames, azimuth, weights)
     w = np.where(w_a > 0, w, 0.0)
@@ -394,4 +441,10 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
         c = 4.685 * scale
         robust = np.where(r < c, (1.0 - (r / c) ** 2) ** 2, 0.0)
     zen, azi = angles.angles_from_sun_in_world(fitted)
-    return [float(v) for v in zen], [float(v) for v in azi]
+    zen = np.atleast_1d(np.asarray(zen, dtype=float))
+    if height_spread_deg is not None:
+        if len(height_spread_deg) != n:
+            raise ValueError(f"{n} frames and {len(height_spread_deg)} height spreads")
+        zen = _heights_pinned(t, z, w, robust, good, height_spread_deg, zen,
+                              (order, lo, hi, windows))
+    return [float(v) for v in zen], [float(v) for v in np.atleast_1d(azi)]

@@ -314,7 +314,8 @@ def _smooth_segments(numbers, raws, segments, mode, options, times, circle=None,
             z_s, a_s = smoothing.two_pass_local_directions(
                 x, *_columns([raws[k] for k in ks]),
                 prior_zenith=[None if c is None else c[0] for c in along],
-                prior_azimuth=[None if c is None else c[1] for c in along])
+                prior_azimuth=[None if c is None else c[1] for c in along],
+                height_spread_deg=[raws[k].height_spread_deg for k in ks])
         else:
             z_s, a_s = smoothing.smooth_angles(
                 [numbers[k] for k in ks], *_columns([raws[k] for k in ks]), mode,

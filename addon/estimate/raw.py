@@ -23,7 +23,12 @@ class RawSun:
     not contradicted by the footage; clock_night: the clock puts the frame
     at night (its predicted Sun is clock_sun, below the horizon).
     circle_checked: whether a circle of the Sun's path checked the Sun (the
-    whole-clip estimate's; None where the method has no such check)."""
+    whole-clip estimate's; None where the method has no such check).
+    height_spread_deg: how far the tracker's Sun could move in height
+    unnoticed (TrackedFrame.elevation_pinned_deg; 90 where its shadows'
+    tips are out of view, so any lower Sun fits them alike), None where the
+    tracker did not refine it (a path's grid cell pins no height either).
+    The smoothing weighs the height by it."""
     frame: int
     zenith_deg: Optional[float] = None
     azimuth_deg: Optional[float] = None
@@ -35,6 +40,7 @@ class RawSun:
     clock_night: bool = False
     shadows_in_view: bool = True
     circle_checked: Optional[bool] = None
+    height_spread_deg: Optional[float] = None
 
     @property
     def has_sun(self) -> bool:

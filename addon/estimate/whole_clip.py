@@ -411,9 +411,18 @@ def _without_dark_segments(bounds: List[int], measured: Sequence[bool],
 def _height_unpinned(r: "RawFrame") -> bool:
     """Whether a frame's tracked Sun has an elevation its shadows in view
     do not pin (ELEVATION_PINNED_MAX_DEG)."""
-    # tracked: a native TrackedFrame, a moving camera's FrameShadow, or None
+    spread = _height_spread_deg(r)
+    return spread is not None and spread > ELEVATION_PINNED_MAX_DEG
+
+
+def _height_spread_deg(r: "RawFrame") -> Optional[float]:
+    """How far a frame's tracked Sun could move in height unnoticed (deg,
+    90 past ELEVATION_PINNED_MAX_DEG), None where the tracker did not
+    refine it."""
     pinned = getattr(r.tracked, "elevation_pinned_deg", None)
-    return r.refined and pinned is not None and pinned > ELEVATION_PINNED_MAX_DEG
+    if not r.refined or pinned is None:
+        return None
+    return 90.0 if pinned > ELEVATION_PINNED_MAX_DEG else float(pinned)
 
 
 def _azimuth_apart_deg(a, b) -> float:
@@ -1469,7 +1478,8 @@ def _raw_sun(r: RawFrame, north: float, clock_sun=None, clock_night: bool = Fals
     return RawSun(r.frame, *angles_of, confidence=r.on_circle, reason=r.reason,
                   tracked=r.tracked, sunlight=r.sunlight, clock_sun=clock_sun,
                   clock_night=clock_night,
-                  shadows_in_view=r.shadows_in_view, circle_checked=r.circle_checked)
+                  shadows_in_view=r.shadows_in_view, circle_checked=r.circle_checked,
+                  height_spread_deg=_height_spread_deg(r))
 
 
 def _note(track, scene, camera, samples, by_frame, options) -> None:

@@ -148,3 +148,40 @@ def test_the_local_fits_at_once_are_each_frames_least_squares():
         want = np.linalg.lstsq(x, values[near][sel] * np.sqrt(kern[sel])[:, None],
                                rcond=None)[0][0]
         assert np.allclose(got[i], want, atol=1e-10), i
+
+
+def unpinned_morning(seed=5):
+    """A morning of 32 frames (urban15's shape): most frames' shadows point
+    the Sun's way but do not pin its height, and came back with the Sun 4-10
+    deg too low; frames 3, 8, 9 and 11 pin it (0.2 deg noise). (times s,
+    truth, raw zenith, raw azimuth, each frame's height spread)"""
+    hours = np.linspace(-3.0, -1.0, 32)
+    truth = sun_path(hours, latitude=60.0, declination=-12.0)
+    rng = np.random.default_rng(seed)
+    pinned = {3, 8, 9, 11}
+    raw_z = [z + (rng.normal(0, 0.2) if k in pinned else rng.uniform(4.0, 10.0))
+             for k, (z, _) in enumerate(truth)]
+    raw_a = [a + rng.normal(0, 0.2) for _, a in truth]
+    spread = [0.5 if k in pinned else 90.0 for k in range(32)]
+    return list(hours * 3600.0), truth, raw_z, raw_a, spread
+
+
+def test_heights_the_shadows_do_not_pin_follow_the_frames_that_pin_them():
+    t, truth, raw_z, raw_a, spread = unpinned_morning()
+    zs, azs = smoothing.two_pass_local_directions(t, raw_z, raw_a, [1.0] * len(t),
+                                                  height_spread_deg=spread)
+    z0, a0 = smoothing.two_pass_local_directions(t, raw_z, raw_a, [1.0] * len(t))
+    near = range(1, 12)  # the frames around the pinned ones (3, 8, 9, 11)
+    corrected = [abs(zs[k] - truth[k][0]) for k in near]
+    alike = [abs(z0[k] - truth[k][0]) for k in near]
+    assert np.mean(alike) > 4.0, alike  # the unpinned frames pull every height down
+    # Toward the pinned frames, shrunk by their own scatter (2 deg).
+    assert np.mean(corrected) < 2.0 and max(corrected) < 3.0, corrected
+    # Far from them the unpinned frames' own fit stands, and the azimuths
+    # are the direction's fit either way.
+    assert abs(zs[31] - z0[31]) < 0.5
+    assert max(abs(azs[k] - a0[k]) for k in range(len(t))) < 1e-9
+    # Every frame pinned alike, or none: nothing to correct toward.
+    for alike in ([0.5] * len(t), [90.0] * len(t), [None] * len(t)):
+        assert smoothing.two_pass_local_directions(t, raw_z, raw_a, [1.0] * len(t),
+                                                   height_spread_deg=alike) == (z0, a0)
