@@ -306,7 +306,7 @@ FINEST_HEIGHT_SPREAD_DEG = 0.5
 HEIGHT_SCATTER_DEG = 2.0
 
 
-def _heights_pinned(t, z, w, robust, good, height_spread_deg, zen, windows):
+def _heights_pinned(t, z, w, good, height_spread_deg, zen, windows):
     """two_pass_local_directions' zeniths corrected toward the frames whose
     shadows pin the height best: each frame's correction is the kernel-
     weighted mean, over its neighbours, of raw minus fitted zenith, each
@@ -315,9 +315,9 @@ def _heights_pinned(t, z, w, robust, good, height_spread_deg, zen, windows):
     and a slope from the unpinned ones' scatter would swing at a segment's
     ends. The direction's fit already follows the Sun's motion (and the
     prior); among frames alike the correction is none, and within the
-    pinned Suns' own scatter it is shrunk (HEIGHT_SCATTER_DEG). The
-    direction's robust weights stay: a pinned Sun the direction's fit
-    rejected steers no height either."""
+    pinned Suns' own scatter it is shrunk (HEIGHT_SCATTER_DEG). Not the
+    direction's robust weights: where the unpinned Suns are many and low,
+    they count the few pinned ones as outliers."""
     spread = np.array([np.nan if v is None else float(v) for v in height_spread_deg])
     spread = np.where(np.isfinite(spread), np.maximum(spread, FINEST_HEIGHT_SPREAD_DEG), 90.0)
     if np.ptp(spread[good]) == 0:
@@ -326,7 +326,7 @@ def _heights_pinned(t, z, w, robust, good, height_spread_deg, zen, windows):
     residual = np.zeros((len(t), 3))
     residual[good, 0] = z[good] - zen[good]
     hw = (FINEST_HEIGHT_SPREAD_DEG / spread) ** 2
-    correction = np.nan_to_num(_local_fits(t, order, lo, hi, win, w * robust * hw, residual,
+    correction = np.nan_to_num(_local_fits(t, order, lo, hi, win, w * hw, residual,
                                            max_degree=0)[:, 0])
     correction = correction ** 3 / (correction ** 2 + HEIGHT_SCATTER_DEG ** 2)
     return np.clip(zen + correction, 0.0, 180.0)
@@ -445,6 +445,6 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
     if height_spread_deg is not None:
         if len(height_spread_deg) != n:
             raise ValueError(f"{n} frames and {len(height_spread_deg)} height spreads")
-        zen = _heights_pinned(t, z, w, robust, good, height_spread_deg, zen,
+        zen = _heights_pinned(t, z, w, good, height_spread_deg, zen,
                               (order, lo, hi, windows))
     return [float(v) for v in zen], [float(v) for v in np.atleast_1d(azi)]

@@ -962,3 +962,39 @@ def test_a_sun_the_tracker_could_not_refine_says_so():
     assert not clip.refine(1, raw, (0, 1), 0, False, 1, 1)
     assert raw.sun_in_world is not None and raw.confidence > 0
     assert raw.reason == whole_clip.PATH_CELL_ONLY
+
+
+def test_the_frames_that_pin_the_height_set_it_for_those_that_do_not():
+    """A stretch whose shadows' tips run out of view (the tracker's Suns
+    there fit any lower Sun, and came back 5-9 deg too low: height spread
+    90) around three frames that pin it within 0.5 deg: the smoothing keeps
+    the stretch's azimuths and takes its height from the pinned frames.
+    Without the spreads it follows the low Suns."""
+    n = 32
+    frames = list(range(1, n + 1))
+    times = frame_times(n)
+    rng = np.random.default_rng(7)
+    pinned = {6, 10, 14}
+
+    def raws(spreads: bool):
+        out = []
+        for k, f in enumerate(frames):
+            z, a = angles.angles_from_sun_in_world(sun_on_its_circle(k))
+            low = 0.0 if k in pinned else rng.uniform(5.0, 9.0)
+            out.append(RawSun(f, float(z) + low + rng.normal(0, 0.2),
+                              (float(a) + rng.normal(0, 0.2)) % 360.0, confidence=0.9,
+                              height_spread_deg=(0.5 if k in pinned else 90.0) if spreads
+                              else None))
+        return out
+
+    opts = estimate_options.EstimateOptions()
+    near = range(3, 18)
+    for spreads in (True, False):
+        zs, azs = finish._smooth_segments(frames, raws(spreads), [frames], "two_pass", opts,
+                                          times)
+        errors = [error_deg(angles.sun_in_world_from_angles(zs[k], azs[k]), sun_on_its_circle(k))
+                  for k in near]
+        if spreads:
+            assert np.mean(errors) < 2.0, errors
+        else:
+            assert np.mean(errors) > 4.0, errors
