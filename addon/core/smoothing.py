@@ -298,6 +298,9 @@ def _local_fits(t, order, lo, hi, windows, weights, values, max_degree=2):
 # elevation_pinned_deg steps): a frame's weight in the height's correction
 # is (this / its spread) squared, an inverse variance.
 FINEST_HEIGHT_SPREAD_DEG = 0.5
+# The spread of a height no shadow in view pins (the tracker's steps stop at
+# 8 deg; the track's sun_height_pinned_deg writes this too).
+UNPINNED_HEIGHT_SPREAD_DEG = 90.0
 # The pinned Suns' own scatter in height (deg): the best-pinned raw Suns are
 # within 2 deg of the truth 97% of the time on the static suite. The
 # height's correction c is shrunk to c * c^2 / (c^2 + this^2): one pinned
@@ -319,7 +322,8 @@ def _heights_pinned(t, z, w, good, height_spread_deg, zen, windows):
     direction's robust weights: where the unpinned Suns are many and low,
     they count the few pinned ones as outliers."""
     spread = np.array([np.nan if v is None else float(v) for v in height_spread_deg])
-    spread = np.where(np.isfinite(spread), np.maximum(spread, FINEST_HEIGHT_SPREAD_DEG), 90.0)
+    spread = np.where(np.isfinite(spread), np.maximum(spread, FINEST_HEIGHT_SPREAD_DEG),
+                      UNPINNED_HEIGHT_SPREAD_DEG)
     if np.ptp(spread[good]) == 0:
         return zen
     order, lo, hi, win = windows
@@ -378,7 +382,8 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
 
     `height_spread_deg` (one per frame): how far each frame's Sun could
     move in height unnoticed (a tracked Sun whose shadows' tips are out of
-    view: any lower Sun fits them alike, 90; None: not measured, as 90). The
+    view: any lower Sun fits them alike, UNPINNED_HEIGHT_SPREAD_DEG; None:
+    not measured, the same). The
     azimuths count as any frame's, and the height is corrected toward the
     frames that pin it best (_heights_pinned).
     """

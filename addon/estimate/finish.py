@@ -257,7 +257,8 @@ def finish(native, track: trackfile.Track, raws: List[RawSun], options: Estimate
             est.sun_ambient_ratio = tracked.contrast
             if options.method == "default":  # the thesis's tracker measures none
                 est.shadow_misfit = tracked.misfit
-                est.sun_height_pinned_deg = min(90.0, float(tracked.elevation_pinned_deg))
+                est.sun_height_pinned_deg = min(smoothing.UNPINNED_HEIGHT_SPREAD_DEG,
+                                                float(tracked.elevation_pinned_deg))
         track.frames.append(est)
 
 

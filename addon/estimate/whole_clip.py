@@ -49,7 +49,7 @@ from .errors import Cancelled, EstimateError
 from .frames import Gray
 from .options import gamma
 from .raw import RawSun
-from ..core import angles, clock, trackfile
+from ..core import angles, clock, smoothing, trackfile
 from ..core.trackfile import Sunlight
 
 # Frames spread over the clip whose high quantile per surface sample is its
@@ -416,13 +416,14 @@ def _height_unpinned(r: "RawFrame") -> bool:
 
 
 def _height_spread_deg(r: "RawFrame") -> Optional[float]:
-    """How far a frame's tracked Sun could move in height unnoticed (deg,
-    90 past ELEVATION_PINNED_MAX_DEG), None where the tracker did not
-    refine it."""
+    """How far a frame's tracked Sun could move in height unnoticed (deg;
+    past ELEVATION_PINNED_MAX_DEG, smoothing.UNPINNED_HEIGHT_SPREAD_DEG),
+    None where the tracker did not refine it."""
     pinned = getattr(r.tracked, "elevation_pinned_deg", None)
     if not r.refined or pinned is None:
         return None
-    return 90.0 if pinned > ELEVATION_PINNED_MAX_DEG else float(pinned)
+    return smoothing.UNPINNED_HEIGHT_SPREAD_DEG if pinned > ELEVATION_PINNED_MAX_DEG \
+        else float(pinned)
 
 
 def _azimuth_apart_deg(a, b) -> float:
