@@ -276,11 +276,14 @@ def _local_fits(t, order, lo, hi, windows, weights, values, max_degree=2):
         degree = np.minimum(np.where((m >= 6) & (sides >= 3), 2, np.where(m >= 3, 1, 0)),
                             np.minimum(distinct - 1, max_degree))
         dk = np.where(sel, d, 0.0)
-        powers = [kern * dk ** k for k in range(5)]
+        # Only the moments the highest degree asked for needs (most of the
+        # fits' time over a long clip).
+        powers = [kern * dk ** k for k in range(2 * max_degree + 1)]
         moments = np.stack([p.sum(axis=1) for p in powers], axis=1)
         y = values[near]
-        sums = np.stack([np.einsum("ij,ijc->ic", powers[k], y) for k in range(3)], axis=1)
-        for deg in (0, 1, 2):
+        sums = np.stack([np.einsum("ij,ijc->ic", powers[k], y) for k in range(max_degree + 1)],
+                        axis=1)
+        for deg in range(max_degree + 1):
             pick = np.flatnonzero((degree == deg) & (m > 0))
             if len(pick):
                 terms = deg + 1
