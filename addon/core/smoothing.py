@@ -449,10 +449,9 @@ def two_pass_local_directions(frames, zenith, azimuth, weights=None, half_window
         c = 4.685 * scale
         robust = np.where(r < c, (1.0 - (r / c) ** 2) ** 2, 0.0)
     zen, azi = angles.angles_from_sun_in_world(fitted)
-    zen = np.atleast_1d(np.asarray(zen, dtype=float))
     if height_spread_deg is not None:
         if len(height_spread_deg) != n:
             raise ValueError(f"{n} frames and {len(height_spread_deg)} height spreads")
         zen = _heights_pinned(t, z, w, good, height_spread_deg, zen,
                               (order, lo, hi, windows))
-    return [float(v) for v in zen], [float(v) for v in np.atleast_1d(azi)]
+    return [float(v) for v in zen], [float(v) for v in azi]
